@@ -1,0 +1,83 @@
+/* spherecull — the drop-in sphere prefilter: one ray against a block of
+ * 4, 8 or 16 bounding spheres at once, returning a reject mask.
+ *
+ * A set bit means "this ray certainly misses sphere i within [tmin, tmax]",
+ * so the triangle inside need not be tested. The test is conservative: a ray
+ * that truly hits a triangle contained in the sphere is never rejected, also
+ * for origins far from the sphere, grazing rays and rounding in oc = O - c.
+ * Every condition is written "reject iff ..." so NaN never rejects, and a
+ * sphere with r2 = +inf (what the builders emit for bad triangles) never
+ * rejects.
+ *
+ * Reject iff, with oc = O - c, dd = D.D, and u = 2^-24:
+ *   |oc x D|^2 > (r2 (1 + 2^-10) + 1025 (8u)^2 |oc|^2) dd      (misses the line)
+ *   or the sphere lies wholly before tmin or wholly beyond tmax along the ray,
+ *   each decided with a rounding allowance on oc.D.
+ *
+ * Example (any tracer, e.g. inside an Embree user-geometry callback):
+ *
+ *   sc_sphere_block8 blk;                          // built once per leaf/cluster
+ *   sc_sphere_block8_init(&blk);                   // all lanes r2 = -1: empty
+ *   for (int i = 0; i < n; i++) sc_sphere_block8_set(&blk, i, &spheres[i]);
+ *   ...
+ *   sc_ray ray = { {ox, oy, oz}, tnear, {dx, dy, dz}, tfar };
+ *   unsigned live = ~sc_reject8(&ray, &blk) & 0xffu;
+ *   while (live) { int i = __builtin_ctz(live); live &= live - 1; test_triangle(i); }
+ *
+ * Empty lanes (r2 < 0) always reject, so partly filled blocks need no count.
+ * The scalar definitions here are the specification; sc_reject* dispatch to
+ * the best SIMD kernel for this CPU (see sc_simd.h).
+ */
+#ifndef SPHERECULL_SC_PREFILTER_H
+#define SPHERECULL_SC_PREFILTER_H
+
+#include <stdint.h>
+#include "sc_circumsphere.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* 32 bytes, laid out like Embree's RTCRay prefix. */
+typedef struct sc_ray {
+    float org[3];
+    float tmin;
+    float dir[3];
+    float tmax;
+} sc_ray;
+
+/* SoA sphere blocks. An empty lane has r2 < 0 and is always rejected. */
+typedef struct __attribute__((aligned(16))) sc_sphere_block4 {
+    float cx[4], cy[4], cz[4], r2[4];
+} sc_sphere_block4;
+typedef struct __attribute__((aligned(32))) sc_sphere_block8 {
+    float cx[8], cy[8], cz[8], r2[8];
+} sc_sphere_block8;
+typedef struct __attribute__((aligned(64))) sc_sphere_block16 {
+    float cx[16], cy[16], cz[16], r2[16];
+} sc_sphere_block16;
+
+_Static_assert(sizeof(sc_ray) == 32, "sc_ray is 32 bytes");
+_Static_assert(sizeof(sc_sphere_block4) == 64, "block4 is one cache line");
+_Static_assert(sizeof(sc_sphere_block8) == 128, "block8 is two cache lines");
+_Static_assert(sizeof(sc_sphere_block16) == 256, "block16 is four cache lines");
+
+void sc_sphere_block4_init(sc_sphere_block4 *b);
+void sc_sphere_block8_init(sc_sphere_block8 *b);
+void sc_sphere_block16_init(sc_sphere_block16 *b);
+void sc_sphere_block4_set(sc_sphere_block4 *b, int lane, const sc_spheref *s);
+void sc_sphere_block8_set(sc_sphere_block8 *b, int lane, const sc_spheref *s);
+void sc_sphere_block16_set(sc_sphere_block16 *b, int lane, const sc_spheref *s);
+
+/* The scalar specification of one lane: 1 = reject. */
+int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2);
+
+/* Reject masks, bit i for lane i; dispatched to the best ISA. */
+uint32_t sc_reject4(const sc_ray *ray, const sc_sphere_block4 *b);
+uint32_t sc_reject8(const sc_ray *ray, const sc_sphere_block8 *b);
+uint32_t sc_reject16(const sc_ray *ray, const sc_sphere_block16 *b);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

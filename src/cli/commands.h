@@ -1,0 +1,26 @@
+/* Subcommands of the spherecull CLI. Each returns the process exit status:
+ * 0 on success, 1 on a runtime error (reported as one line on stderr),
+ * 2 on a usage error. */
+#ifndef SPHERECULL_CLI_COMMANDS_H
+#define SPHERECULL_CLI_COMMANDS_H
+
+#include <stdio.h>
+
+typedef struct sc_command {
+    const char *name;
+    const char *summary;
+    int (*run)(int argc, char **argv);   /* argv[0] is the command name */
+} sc_command;
+
+int sc_cmd_accuracy(int argc, char **argv);
+
+/* One line "spherecull: <command>: <message>" on stderr. */
+void sc_cli_error(const char *command, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* Writes through a temporary file in the same directory and renames it into
+ * place, so a failed or interrupted run never leaves a half-written output.
+ * write_fn returns 0 on success. */
+int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx);
+
+#endif

@@ -1,0 +1,81 @@
+/* spherecull — command-line front end. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "commands.h"
+
+/* One row per subcommand; each subsystem adds its own. */
+static const sc_command commands[] = {
+    { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
+};
+
+void sc_cli_error(const char *command, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "spherecull: %s: ", command);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+}
+
+int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
+{
+    size_t len = strlen(path);
+    char *tmp = malloc(len + 16);
+    if (!tmp)
+        return -1;
+    snprintf(tmp, len + 16, "%s.tmpXXXXXX", path);
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        free(tmp);
+        return -1;
+    }
+    FILE *f = fdopen(fd, "wb");
+    int ok = f && write_fn(ctx, f) == 0;
+    if (f) {
+        ok = ok && fflush(f) == 0 && !ferror(f);
+        ok = (fclose(f) == 0) && ok;
+    } else {
+        close(fd);
+    }
+    if (ok)
+        ok = rename(tmp, path) == 0;
+    if (!ok) {
+        int saved = errno;
+        unlink(tmp);
+        errno = saved;
+    }
+    free(tmp);
+    return ok ? 0 : -1;
+}
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: spherecull <command> [options]\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-14s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\n'spherecull <command> --help' describes one command.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (strcmp(argv[1], commands[i].name) == 0)
+            return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "spherecull: unknown command '%s' (try 'spherecull --help')\n", argv[1]);
+    return 2;
+}

@@ -1,0 +1,87 @@
+/* Triangle spheres in float and double: one template, two instantiations. */
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <string.h>
+
+#include "spherecull/sc_circumsphere.h"
+
+#define REAL float
+#define SUF f
+#define SPHERE sc_spheref
+#define REAL_U (FLT_EPSILON / 2)
+#define REAL_TRUE_MIN FLT_TRUE_MIN
+#define LDEXP ldexpf
+#define ILOGB ilogbf
+#define FABS fabsf
+#define ISFINITE isfinite
+#include "circumsphere_template.h"
+#undef REAL
+#undef SUF
+#undef SPHERE
+#undef REAL_U
+#undef REAL_TRUE_MIN
+#undef LDEXP
+#undef ILOGB
+#undef FABS
+
+#define REAL double
+#define SUF d
+#define SPHERE sc_sphered
+#define REAL_U (DBL_EPSILON / 2)
+#define REAL_TRUE_MIN DBL_TRUE_MIN
+#define LDEXP ldexp
+#define ILOGB ilogb
+#define FABS fabs
+#include "circumsphere_template.h"
+
+static const char *const method_names[SC_METHOD_COUNT] = {
+    "textbook", "cramer", "projective-literal", "projective-reduced",
+};
+static const char *const origin_names[SC_ORIGIN_COUNT] = { "opposite-longest", "as-given" };
+static const char *const kind_names[SC_SPHERE_KIND_COUNT] = { "circum", "minimal" };
+
+const char *sc_method_name(sc_method m)
+{
+    return (unsigned)m < SC_METHOD_COUNT ? method_names[m] : "unknown";
+}
+
+const char *sc_origin_name(sc_origin o)
+{
+    return (unsigned)o < SC_ORIGIN_COUNT ? origin_names[o] : "unknown";
+}
+
+const char *sc_sphere_kind_name(sc_sphere_kind k)
+{
+    return (unsigned)k < SC_SPHERE_KIND_COUNT ? kind_names[k] : "unknown";
+}
+
+static sc_status lookup(const char *name, const char *const *names, int count, int *out)
+{
+    if (!name || !out)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < count; i++)
+        if (strcmp(name, names[i]) == 0) {
+            *out = i;
+            return SC_OK;
+        }
+    return SC_ERR_INVALID_ARGUMENT;
+}
+
+sc_status sc_method_from_name(const char *name, sc_method *out)
+{
+    int i = 0;
+    sc_status st = lookup(name, method_names, SC_METHOD_COUNT, &i);
+    if (st == SC_OK)
+        *out = (sc_method)i;
+    return st;
+}
+
+sc_status sc_sphere_kind_from_name(const char *name, sc_sphere_kind *out)
+{
+    int i = 0;
+    sc_status st = lookup(name, kind_names, SC_SPHERE_KIND_COUNT, &i);
+    if (st == SC_OK)
+        *out = (sc_sphere_kind)i;
+    return st;
+}
