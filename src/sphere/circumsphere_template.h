@@ -178,7 +178,9 @@ static int FN(circum_scaled)(const REAL a[3], const REAL b[3], sc_method method,
     }
 }
 
-/* Centre = C + 2^e off, r2 = 2^2e r2s; SC_ERR_RANGE if that is not finite. */
+/* Centre = C + 2^e off, r2 = 2^2e r2s. SC_ERR_RANGE if either overflows, or
+ * if a positive r2 underflows to zero (subnormal triangles in float); the
+ * centre is still stored then, for the prefilter, which recomputes r2. */
 static sc_status FN(unscale)(SPHERE *out, const REAL *C, const REAL off[3], REAL r2s, int e)
 {
     for (int i = 0; i < 3; i++)
@@ -188,7 +190,7 @@ static sc_status FN(unscale)(SPHERE *out, const REAL *C, const REAL off[3], REAL
         FN(set_never_reject)(out);
         return SC_ERR_RANGE;
     }
-    return SC_OK;
+    return (r2s > 0 && out->r2 == 0) ? SC_ERR_RANGE : SC_OK;
 }
 
 static sc_status FN(check_args)(const REAL *A, const REAL *B, const REAL *C,
@@ -202,8 +204,8 @@ static sc_status FN(check_args)(const REAL *A, const REAL *B, const REAL *C,
     return SC_OK;
 }
 
-sc_status FN(sc_circumsphere)(const REAL A[3], const REAL B[3], const REAL C[3],
-                              sc_method method, sc_origin origin, SPHERE *out)
+static sc_status FN(circumsphere)(const REAL A[3], const REAL B[3], const REAL C[3],
+                                  sc_method method, sc_origin origin, SPHERE *out)
 {
     sc_status st = FN(check_args)(A, B, C, method, origin, out);
     if (st != SC_OK) {
@@ -226,8 +228,8 @@ sc_status FN(sc_circumsphere)(const REAL A[3], const REAL B[3], const REAL C[3],
 /* The longest edge's midpoint sphere when the triangle is right or obtuse
  * (|a|^2 + |b|^2 <= |c|^2, c the longest edge), which covers collinear and
  * duplicate vertices too; the circumsphere otherwise. */
-sc_status FN(sc_minimal_sphere)(const REAL A[3], const REAL B[3], const REAL C[3],
-                                sc_method method, sc_origin origin, SPHERE *out)
+static sc_status FN(minimal_sphere)(const REAL A[3], const REAL B[3], const REAL C[3],
+                                    sc_method method, sc_origin origin, SPHERE *out)
 {
     sc_status st = FN(check_args)(A, B, C, method, origin, out);
     if (st != SC_OK) {
@@ -235,27 +237,67 @@ sc_status FN(sc_minimal_sphere)(const REAL A[3], const REAL B[3], const REAL C[3
             FN(set_never_reject)(out);
         return st;
     }
-    /* Always order by the longest edge here: the obtuse test needs it, and the
-     * circumsphere branch honours the caller's origin separately. */
-    const REAL *V[3];
-    FN(order_vertices)(V, SC_ORIGIN_OPPOSITE_LONGEST, A, B, C);
-    REAL a[3], b[3];
-    int e = FN(edges_prescaled)(a, b, V);
-    if (e == INT_MIN) {                       /* all three vertices equal */
+    /* The triangle is right or obtuse at vertex X iff (P - X).(R - X) <= 0 for
+     * the other two vertices P, R. Each of the three dots is tested directly:
+     * choosing X as "opposite the longest edge" first fails on needles, whose
+     * two long edges differ by less than their rounding while the angle at
+     * the short edge is far from 90 degrees. Work in a prescaled frame so
+     * the dots neither underflow nor overflow. */
+    const REAL *P[3] = { A, B, C };
+    REAL e[3][3];                              /* e[i] = P[i+1] - P[i] */
+    REAL m = 0;
+    for (int i = 0; i < 3; i++) {
+        FN(sub3)(e[i], P[(i + 1) % 3], P[i]);
+        for (int j = 0; j < 3; j++)
+            if (FABS(e[i][j]) > m)
+                m = FABS(e[i][j]);
+    }
+    if (m == 0) {                              /* all three vertices equal */
         out->c[0] = C[0], out->c[1] = C[1], out->c[2] = C[2];
         out->r2 = 0;
         return SC_OK;
     }
-    REAL amb[3];
-    FN(sub3)(amb, a, b);
-    REAL aa = FN(dot3)(a, a), bb = FN(dot3)(b, b), cc = FN(dot3)(amb, amb);
-    if (aa + bb <= cc) {
-        /* Midpoint of V0 V1 as V2 + (a + b)/2 keeps everything in the
-         * prescaled frame, so no intermediate can overflow. */
-        REAL off[3] = { (a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2 };
-        return FN(unscale)(out, V[2], off, cc / 4, e);
+    int scale = ILOGB(m);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            e[i][j] = LDEXP(e[i][j], -scale);
+    int x = -1;
+    REAL lowest = 0;
+    for (int i = 0; i < 3; i++) {
+        /* at P[i]: (P[i+1] - P[i]) . (P[i-1] - P[i]) = -e[i] . e[i-1] */
+        REAL d = -FN(dot3)(e[i], e[(i + 2) % 3]);
+        if (d <= lowest && (x < 0 || d < lowest)) {
+            x = i;
+            lowest = d;
+        }
     }
-    return FN(sc_circumsphere)(A, B, C, method, origin, out);
+    if (x >= 0) {
+        /* Midpoint of the edge opposite P[x]: P[x+1] + e[x+1]/2, in the
+         * prescaled frame so nothing overflows. */
+        const REAL *e_opp = e[(x + 1) % 3];
+        REAL off[3] = { e_opp[0] / 2, e_opp[1] / 2, e_opp[2] / 2 };
+        return FN(unscale)(out, P[(x + 1) % 3], off, FN(dot3)(e_opp, e_opp) / 4, scale);
+    }
+    return FN(circumsphere)(A, B, C, method, origin, out);
+}
+
+/* Public contract: on any error the sphere is (0,0,0) with r2 = +inf. */
+sc_status FN(sc_circumsphere)(const REAL A[3], const REAL B[3], const REAL C[3],
+                              sc_method method, sc_origin origin, SPHERE *out)
+{
+    sc_status st = FN(circumsphere)(A, B, C, method, origin, out);
+    if (st != SC_OK && out)
+        FN(set_never_reject)(out);
+    return st;
+}
+
+sc_status FN(sc_minimal_sphere)(const REAL A[3], const REAL B[3], const REAL C[3],
+                                sc_method method, sc_origin origin, SPHERE *out)
+{
+    sc_status st = FN(minimal_sphere)(A, B, C, method, origin, out);
+    if (st != SC_OK && out)
+        FN(set_never_reject)(out);
+    return st;
 }
 
 void FN(sc_sphere_make_conservative)(const REAL A[3], const REAL B[3], const REAL C[3],
@@ -292,12 +334,14 @@ sc_status FN(sc_prefilter_sphere)(const REAL A[3], const REAL B[3], const REAL C
         FN(set_never_reject)(out);
         return SC_ERR_INVALID_ARGUMENT;
     }
+    /* Only the centre matters here: r2 is recomputed from it below, so an
+     * r2 that underflowed (SC_ERR_RANGE with a finite centre) is fine. */
     sc_status st = kind == SC_SPHERE_CIRCUM
-        ? FN(sc_circumsphere)(A, B, C, method, SC_ORIGIN_OPPOSITE_LONGEST, out)
+        ? FN(circumsphere)(A, B, C, method, SC_ORIGIN_OPPOSITE_LONGEST, out)
         : SC_ERR_DEGENERATE;
-    if (st != SC_OK)
-        st = FN(sc_minimal_sphere)(A, B, C, method, SC_ORIGIN_OPPOSITE_LONGEST, out);
-    if (st != SC_OK) {
+    if (st != SC_OK && !(st == SC_ERR_RANGE && ISFINITE(out->r2)))
+        st = FN(minimal_sphere)(A, B, C, method, SC_ORIGIN_OPPOSITE_LONGEST, out);
+    if (st != SC_OK && !(st == SC_ERR_RANGE && ISFINITE(out->r2))) {
         FN(set_never_reject)(out);   /* non-finite input or overflow */
         return SC_OK;
     }
