@@ -112,8 +112,8 @@ static void print_table(const report *rep)
         }
     }
     printf("\npf.fails = vertices outside a conservative prefilter sphere (all 8 prefilter variants), "
-           "checked exactly; must be 0.\n(N errors) = the kernel reported a status (degenerate or "
-           "non-finite input) for every triangle, as it should for that family.\n");
+           "checked exactly; must be 0.\n(N errors) = every triangle was refused with a status "
+           "(degenerate, non-finite input, or r2 outside the exponent range, as for subnormal input).\n");
 }
 
 static void usage(FILE *out)

@@ -189,6 +189,16 @@ void sc_family_triangle(sc_family f, sc_rng *r, int as_float, double V[3][3])
             random_in_cube(r, 1, V[k]);
         break;
     }
+    /* A random vertex order, so "origin as given" meets every configuration
+     * (for a needle: C at the far tip, or at one end of the short edge). */
+    int rot = small_int(r, 0, 2);
+    double W[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            W[k][i] = V[(k + rot) % 3][i];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            V[k][i] = W[k][i];
     if (as_float)
         for (int k = 0; k < 3; k++)
             for (int i = 0; i < 3; i++) {

@@ -71,27 +71,46 @@ static void FN(order_vertices)(const REAL *V[3], sc_origin origin,
     }
 }
 
-/* Edge vectors a = A - C, b = B - C, scaled by an exact power of two so that
- * their largest component lies in [1, 2). Returns the exponent to undo, or
- * INT_MIN when both vectors are zero. Without this, float |n|^2 ~ L^4
- * underflows below L ~ 1e-10 and the literal 4D product overflows past L ~ 1e2. */
-static int FN(edges_prescaled)(REAL a[3], REAL b[3], const REAL *V[3])
+/* out[i] = P[i] - Q[i], all scaled by one exact power of two 2^-e so that the
+ * largest component lies in [1, 2); returns e, or INT_MIN when every
+ * difference is zero. Without the scaling, float |n|^2 ~ L^4 underflows below
+ * L ~ 1e-10 and the literal 4D product overflows past L ~ 1e2. A difference
+ * that overflows (coordinates near +-FLT_MAX) is formed from halved operands,
+ * which is exact for all but subnormal components, negligible at that scale. */
+static int FN(scaled_differences)(REAL (*out)[3], const REAL *const *P, const REAL *const *Q, int count)
 {
-    FN(sub3)(a, V[0], V[2]);
-    FN(sub3)(b, V[1], V[2]);
+    int extra = 0;
     REAL m = 0;
-    for (int i = 0; i < 3; i++) {
-        if (FABS(a[i]) > m) m = FABS(a[i]);
-        if (FABS(b[i]) > m) m = FABS(b[i]);
+    for (int pass = 0; pass < 2; pass++) {
+        m = 0;
+        for (int i = 0; i < count; i++)
+            for (int j = 0; j < 3; j++) {
+                out[i][j] = pass ? P[i][j] / 2 - Q[i][j] / 2 : P[i][j] - Q[i][j];
+                if (FABS(out[i][j]) > m)
+                    m = FABS(out[i][j]);
+            }
+        if (ISFINITE(m))
+            break;
+        extra = 1;
     }
     if (m == 0)
         return INT_MIN;
     int e = ILOGB(m);
-    for (int i = 0; i < 3; i++) {
-        a[i] = LDEXP(a[i], -e);
-        b[i] = LDEXP(b[i], -e);
-    }
-    return e;
+    for (int i = 0; i < count; i++)
+        for (int j = 0; j < 3; j++)
+            out[i][j] = LDEXP(out[i][j], -e);
+    return e + extra;
+}
+
+/* Edge vectors a = V0 - V2, b = V1 - V2, prescaled as above. */
+static int FN(edges_prescaled)(REAL a[3], REAL b[3], const REAL *V[3])
+{
+    REAL e[2][3];
+    const REAL *P[2] = { V[0], V[1] }, *Q[2] = { V[2], V[2] };
+    int scale = FN(scaled_differences)(e, P, Q, 2);
+    for (int j = 0; j < 3; j++)
+        a[j] = e[0][j], b[j] = e[1][j];
+    return scale;
 }
 
 /* Circumcentre offset from C and r^2, both in the prescaled frame.
@@ -244,23 +263,14 @@ static sc_status FN(minimal_sphere)(const REAL A[3], const REAL B[3], const REAL
      * the short edge is far from 90 degrees. Work in a prescaled frame so
      * the dots neither underflow nor overflow. */
     const REAL *P[3] = { A, B, C };
-    REAL e[3][3];                              /* e[i] = P[i+1] - P[i] */
-    REAL m = 0;
-    for (int i = 0; i < 3; i++) {
-        FN(sub3)(e[i], P[(i + 1) % 3], P[i]);
-        for (int j = 0; j < 3; j++)
-            if (FABS(e[i][j]) > m)
-                m = FABS(e[i][j]);
-    }
-    if (m == 0) {                              /* all three vertices equal */
+    const REAL *next[3] = { B, C, A };
+    REAL e[3][3];                              /* e[i] = P[i+1] - P[i], prescaled */
+    int scale = FN(scaled_differences)(e, next, P, 3);
+    if (scale == INT_MIN) {                    /* all three vertices equal */
         out->c[0] = C[0], out->c[1] = C[1], out->c[2] = C[2];
         out->r2 = 0;
         return SC_OK;
     }
-    int scale = ILOGB(m);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            e[i][j] = LDEXP(e[i][j], -scale);
     int x = -1;
     REAL lowest = 0;
     for (int i = 0; i < 3; i++) {
