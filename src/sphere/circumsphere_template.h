@@ -189,7 +189,10 @@ static int FN(circum_scaled)(const REAL a[3], const REAL b[3], sc_method method,
             return 0;
         REAL inv = 1 / qw;
         off[0] = q[0] * inv, off[1] = q[1] * inv, off[2] = q[2] * inv;
-        *r2 = FN(dot3)(q, q) / (qw * qw);
+        /* r^2 from the divided offset, not eq. 15's |q'|^2 / q'_w^2: q'_w^2 ~ L^8
+         * underflows for needles even after prescaling (the literal form keeps
+         * the paper's expression and shows the failure). */
+        *r2 = FN(dot3)(off, off);
         return 1;
     }
     default:
@@ -288,7 +291,29 @@ static sc_status FN(minimal_sphere)(const REAL A[3], const REAL B[3], const REAL
         REAL off[3] = { e_opp[0] / 2, e_opp[1] / 2, e_opp[2] / 2 };
         return FN(unscale)(out, P[(x + 1) % 3], off, FN(dot3)(e_opp, e_opp) / 4, scale);
     }
-    return FN(circumsphere)(A, B, C, method, origin, out);
+    st = FN(circumsphere)(A, B, C, method, origin, out);
+    if (st != SC_ERR_DEGENERATE)
+        return st;
+    /* Acute to working precision, yet too thin for the circumcentre formula
+     * (the literal projective r^2 underflows on extreme needles): the sphere
+     * about the longest edge's midpoint, widened to reach the third vertex,
+     * still encloses the triangle and is within rounding of the minimal one. */
+    int longest = 0;
+    REAL len2[3];
+    for (int i = 0; i < 3; i++) {
+        len2[i] = FN(dot3)(e[i], e[i]);
+        if (len2[i] > len2[longest])
+            longest = i;
+    }
+    const REAL *el = e[longest];
+    REAL off[3] = { el[0] / 2, el[1] / 2, el[2] / 2 };
+    /* the third vertex, relative to the edge's start P[longest]: -e[longest - 1] */
+    const REAL *eprev = e[(longest + 2) % 3];
+    REAL d[3] = { -eprev[0] - off[0], -eprev[1] - off[1], -eprev[2] - off[2] };
+    REAL r2s = FN(dot3)(d, d);
+    if (len2[longest] / 4 > r2s)
+        r2s = len2[longest] / 4;
+    return FN(unscale)(out, P[longest], off, r2s, scale);
 }
 
 /* Public contract: on any error the sphere is (0,0,0) with r2 = +inf. */
