@@ -246,6 +246,17 @@ static void test_arguments_and_contract(void **state)
     assert_true(isinf(s.r2));
     assert_int_equal(sc_prefilter_sphere_f(H, G, F, SC_SPHERE_MINIMAL, SC_METHOD_TEXTBOOK, &s), SC_OK);
     assert_true(isinf(s.r2));
+    /* The radius on request is rounded up: r*r >= r2 exactly (checked in double). */
+    sc_rng rng;
+    sc_rng_seed(&rng, 3);
+    for (int t = 0; t < 100000; t++) {
+        sc_spheref q = { { 0, 0, 0 }, (float)sc_rng_range(&rng, 0, 1e6) };
+        float r = sc_sphere_radius_f(&q);
+        assert_true((double)r * r >= q.r2);
+        assert_true((double)nextafterf(r, 0) * nextafterf(r, 0) < q.r2 || q.r2 == 0);
+    }
+    sc_spheref inf_sphere = { { 0, 0, 0 }, INFINITY };
+    assert_true(isinf(sc_sphere_radius_f(&inf_sphere)));
     /* Names round-trip. */
     for (int m = 0; m < SC_METHOD_COUNT; m++) {
         sc_method back;

@@ -110,6 +110,11 @@ void sc_sphere_make_conservative_f(const float A[3], const float B[3], const flo
 void sc_sphere_make_conservative_d(const double A[3], const double B[3], const double C[3],
                                    sc_sphered *sphere);
 
+/* The radius, on request: sqrt(r2) rounded up, so a sphere that contained
+ * its vertices still does (+inf stays +inf). */
+float sc_sphere_radius_f(const sc_spheref *sphere);
+double sc_sphere_radius_d(const sc_sphered *sphere);
+
 /* ---- n-simplex hyperspheres in En, double ------------------------------- */
 
 enum { SC_SIMPLEX_MAX_DIM = 16 };

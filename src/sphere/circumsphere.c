@@ -14,6 +14,9 @@
 #define LDEXP ldexpf
 #define ILOGB ilogbf
 #define FABS fabsf
+#define SQRT sqrtf
+#define NEXTAFTER nextafterf
+#define FMA fmaf
 #define ISFINITE isfinite
 #include "circumsphere_template.h"
 #undef REAL
@@ -24,6 +27,9 @@
 #undef LDEXP
 #undef ILOGB
 #undef FABS
+#undef SQRT
+#undef NEXTAFTER
+#undef FMA
 
 #define REAL double
 #define SUF d
@@ -33,6 +39,9 @@
 #define LDEXP ldexp
 #define ILOGB ilogb
 #define FABS fabs
+#define SQRT sqrt
+#define NEXTAFTER nextafter
+#define FMA fma
 #include "circumsphere_template.h"
 
 static const char *const method_names[SC_METHOD_COUNT] = {

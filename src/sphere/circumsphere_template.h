@@ -384,6 +384,16 @@ sc_status FN(sc_prefilter_sphere)(const REAL A[3], const REAL B[3], const REAL C
     return SC_OK;
 }
 
+REAL FN(sc_sphere_radius)(const SPHERE *s)
+{
+    if (!s || !(s->r2 >= 0))
+        return (REAL)NAN;
+    REAL r = SQRT(s->r2);
+    if (FMA(r, r, -s->r2) < 0)  /* the sign of a fused result is exact */
+        r = NEXTAFTER(r, (REAL)INFINITY);
+    return r;
+}
+
 #undef FN
 #undef CAT
 #undef CAT_
