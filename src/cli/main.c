@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "commands.h"
@@ -12,6 +13,7 @@
 /* One row per subcommand; each subsystem adds its own. */
 static const sc_command commands[] = {
     { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
+    { "bench-spheres", "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error", sc_cmd_bench_spheres },
 };
 
 void sc_cli_error(const char *command, const char *fmt, ...)
@@ -26,6 +28,21 @@ void sc_cli_error(const char *command, const char *fmt, ...)
 
 int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
 {
+    /* A device or pipe (-o /dev/null, /dev/stdout) is written in place:
+     * renaming a temporary file over it would replace the device node. */
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        if (S_ISDIR(st.st_mode)) {
+            errno = EISDIR;
+            return -1;
+        }
+        FILE *f = fopen(path, "wb");
+        if (!f)
+            return -1;
+        int ok = write_fn(ctx, f) == 0;
+        ok = (fclose(f) == 0) && ok;
+        return ok ? 0 : -1;
+    }
     size_t len = strlen(path);
     char *tmp = malloc(len + 16);
     if (!tmp)

@@ -1,0 +1,140 @@
+/* spherecull — SIMD kernels with run-time dispatch: batch bounding spheres
+ * and ray-vs-sphere reject masks on scalar, SSE4.1, AVX2+FMA and AVX-512.
+ *
+ * ISA selection. On first use the library picks the widest level this CPU
+ * (and OS, via XGETBV) supports, or the level named by the environment
+ * variable SPHERECULL_ISA=scalar|sse4|avx2|avx512. The choice is made once,
+ * thread-safely, and switches every kernel together (batch spheres and the
+ * sc_reject4/8/16 masks of sc_prefilter.h). The library never prints: call
+ * sc_simd_init() to learn whether SPHERECULL_ISA was honoured.
+ *
+ * Batch spheres. Triangles come from a vertex buffer + index buffer or from
+ * pre-gathered SoA arrays; spheres go to SoA arrays cx, cy, cz, r2 that the
+ * caller allocates with room for sc_simd_padded(count) entries (a multiple
+ * of 16). Entries [count, padded) are written as empty lanes (centre 0,
+ * r2 = -1), so 16 consecutive entries copy straight into an
+ * sc_sphere_block16 / two block8 / four block4.
+ *
+ * Results follow the scalar specification in sc_circumsphere.h: vertex C is
+ * moved opposite the longest edge and the edges are prescaled by a power of
+ * two. A triangle whose sphere cannot be formed (degenerate circumsphere,
+ * non-finite input, overflow, out-of-range index) gets centre (0,0,0) and
+ * r2 = +inf, a sphere that never rejects. SSE4.1 kernels round exactly like
+ * the scalar specification; AVX2 and AVX-512 kernels use FMA, which changes
+ * the last bits of centre and r2 but none of the guarantees of the
+ * conservative kinds (every vertex inside, checked exactly in the tests).
+ *
+ * Example:
+ *
+ *   size_t cap = sc_simd_padded(ntri);
+ *   float *buf = aligned_alloc(64, 4 * cap * sizeof(float));
+ *   sc_spheres_soaf out = { buf, buf + cap, buf + 2 * cap, buf + 3 * cap };
+ *   sc_status st = sc_spheres_indexed_f(verts, nverts, idx, ntri, SC_METHOD_TEXTBOOK,
+ *                                       SC_BATCH_PREFILTER_MINIMAL, &out);
+ */
+#ifndef SPHERECULL_SC_SIMD_H
+#define SPHERECULL_SC_SIMD_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "sc_circumsphere.h"
+#include "sc_prefilter.h"
+#include "sc_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum sc_isa {
+    SC_ISA_SCALAR = 0,  /* the scalar specification, any CPU */
+    SC_ISA_SSE4,        /* SSE4.1, 4 float / 2 double lanes */
+    SC_ISA_AVX2,        /* AVX2 + FMA, 8 / 4 lanes */
+    SC_ISA_AVX512,      /* AVX-512 F + VL + DQ, 16 / 8 lanes */
+    SC_ISA_COUNT
+} sc_isa;
+
+/* "scalar", "sse4", "avx2", "avx512"; inverse returns SC_ERR_INVALID_ARGUMENT
+ * for an unknown name. */
+const char *sc_isa_name(sc_isa isa);
+sc_status sc_isa_from_name(const char *name, sc_isa *out);
+
+/* 1 if this build has the level and this CPU and OS can run it. */
+int sc_isa_supported(sc_isa isa);
+
+/* Chooses the kernel table (once; later calls return the first result).
+ * SC_OK: SPHERECULL_ISA unset or honoured. SC_ERR_INVALID_ARGUMENT: unknown
+ * name. SC_ERR_UNSUPPORTED: the CPU or build lacks the named level. In both
+ * error cases the kernels run at the widest supported level. */
+sc_status sc_simd_init(void);
+
+/* The level the kernels run at (initializes on first call). */
+sc_isa sc_isa_active(void);
+
+/* Switches every kernel to `isa` (for tests, benchmarks and the CLI's --isa;
+ * not to be called while other threads run kernels). SC_ERR_UNSUPPORTED if
+ * the CPU or build lacks it (the active level is then unchanged). */
+sc_status sc_isa_force(sc_isa isa);
+
+/* ---- batch spheres -------------------------------------------------------- */
+
+typedef enum sc_batch_kind {
+    SC_BATCH_CIRCUM = 0,          /* sc_circumsphere_*, C opposite the longest edge */
+    SC_BATCH_MINIMAL,             /* sc_minimal_sphere_* */
+    SC_BATCH_PREFILTER_CIRCUM,    /* sc_prefilter_sphere_* (SC_SPHERE_CIRCUM): conservative */
+    SC_BATCH_PREFILTER_MINIMAL,   /* sc_prefilter_sphere_* (SC_SPHERE_MINIMAL): conservative */
+    SC_BATCH_KIND_COUNT
+} sc_batch_kind;
+
+/* "circum", "minimal", "prefilter-circum", "prefilter-minimal". */
+const char *sc_batch_kind_name(sc_batch_kind kind);
+sc_status sc_batch_kind_from_name(const char *name, sc_batch_kind *out);
+
+/* count rounded up to a multiple of 16 (the length every output array needs). */
+size_t sc_simd_padded(size_t count);
+
+typedef struct sc_spheres_soaf { float *cx, *cy, *cz, *r2; } sc_spheres_soaf;
+typedef struct sc_spheres_soad { double *cx, *cy, *cz, *r2; } sc_spheres_soad;
+
+/* Pre-gathered triangles: vertex k of triangle i is (x[k][i], y[k][i], z[k][i]). */
+typedef struct sc_triangles_soaf { const float *x[3], *y[3], *z[3]; } sc_triangles_soaf;
+typedef struct sc_triangles_soad { const double *x[3], *y[3], *z[3]; } sc_triangles_soad;
+
+/* From a vertex buffer (x, y, z per vertex, tightly packed) and an index
+ * buffer (3 per triangle). vertex_count <= SC_SIMD_MAX_VERTICES.
+ * Errors: SC_ERR_INVALID_ARGUMENT for NULL pointers (with count > 0), a bad
+ * enum, or any index >= vertex_count (all other triangles are still
+ * computed; those get r2 = +inf); SC_ERR_LIMIT for too many vertices. */
+#define SC_SIMD_MAX_VERTICES ((size_t)0x2aaaaaaa)   /* 3 * count fits an int32 offset */
+sc_status sc_spheres_indexed_f(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                               size_t triangle_count, sc_method method, sc_batch_kind kind,
+                               const sc_spheres_soaf *out);
+sc_status sc_spheres_indexed_d(const double *vertices, size_t vertex_count, const uint32_t *indices,
+                               size_t triangle_count, sc_method method, sc_batch_kind kind,
+                               const sc_spheres_soad *out);
+sc_status sc_spheres_soa_f(const sc_triangles_soaf *triangles, size_t triangle_count,
+                           sc_method method, sc_batch_kind kind, const sc_spheres_soaf *out);
+sc_status sc_spheres_soa_d(const sc_triangles_soad *triangles, size_t triangle_count,
+                           sc_method method, sc_batch_kind kind, const sc_spheres_soad *out);
+
+/* ---- one sphere against a packet of rays ---------------------------------- */
+
+/* SoA ray packets; lane i is the sc_ray (org, tmin, dir, tmax). */
+typedef struct __attribute__((aligned(32))) sc_ray_packet8 {
+    float ox[8], oy[8], oz[8], tmin[8], dx[8], dy[8], dz[8], tmax[8];
+} sc_ray_packet8;
+typedef struct __attribute__((aligned(64))) sc_ray_packet16 {
+    float ox[16], oy[16], oz[16], tmin[16], dx[16], dy[16], dz[16], tmax[16];
+} sc_ray_packet16;
+_Static_assert(sizeof(sc_ray_packet8) == 256, "packet8 is four cache lines");
+_Static_assert(sizeof(sc_ray_packet16) == 512, "packet16 is eight cache lines");
+
+/* Bit i set iff sc_ray_sphere_reject(ray i, c, r2) would reject: the same
+ * conservative test, lane for lane and bit for bit. 0 if an argument is NULL
+ * (rejecting nothing is always safe). */
+uint32_t sc_reject_packet8(const sc_ray_packet8 *rays, const float c[3], float r2);
+uint32_t sc_reject_packet16(const sc_ray_packet16 *rays, const float c[3], float r2);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,54 @@
+/* The kernel table: one per ISA level, all kernels switch together.
+ * Private to the library, the tests and the benchmark. */
+#ifndef SPHERECULL_SIMD_SC_KERNELS_H
+#define SPHERECULL_SIMD_SC_KERNELS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "spherecull/sc_simd.h"
+
+/* Triangles from a vertex + index buffer (indices != NULL) or SoA arrays. */
+typedef struct sc_tri_source_f {
+    const float *vertices;
+    size_t vertex_count;
+    const uint32_t *indices;
+    const float *soa[3][3];                   /* [vertex][axis] */
+} sc_tri_source_f;
+typedef struct sc_tri_source_d {
+    const double *vertices;
+    size_t vertex_count;
+    const uint32_t *indices;
+    const double *soa[3][3];
+} sc_tri_source_d;
+
+/* Benchmark-only switch: skip the power-of-two prescaling, to measure what
+ * it costs (float then only covers triangle sizes of about 1e-6..1e6). */
+enum { SC_KFLAG_NO_PRESCALE = 1u };
+
+typedef struct sc_kernels {
+    sc_isa isa;
+    /* Fills [0, sc_simd_padded(count)) of out; returns the number of
+     * triangles with an out-of-range index. method/kind already checked. */
+    size_t (*spheres_f)(const sc_tri_source_f *src, size_t count, int method, int kind,
+                        unsigned flags, const sc_spheres_soaf *out);
+    size_t (*spheres_d)(const sc_tri_source_d *src, size_t count, int method, int kind,
+                        unsigned flags, const sc_spheres_soad *out);
+    uint32_t (*reject4)(const sc_ray *ray, const sc_sphere_block4 *b);
+    uint32_t (*reject8)(const sc_ray *ray, const sc_sphere_block8 *b);
+    uint32_t (*reject16)(const sc_ray *ray, const sc_sphere_block16 *b);
+    uint32_t (*packet8)(const sc_ray_packet8 *rays, const float c[3], float r2);
+    uint32_t (*packet16)(const sc_ray_packet16 *rays, const float c[3], float r2);
+} sc_kernels;
+
+extern const sc_kernels sc_kernels_scalar;
+#if defined(__x86_64__) || defined(__i386__)
+extern const sc_kernels sc_kernels_sse4, sc_kernels_avx2, sc_kernels_avx512;
+#endif
+
+/* The table for a level, or NULL if the build or CPU lacks it. */
+const sc_kernels *sc_kernels_for(sc_isa isa);
+/* The active table (initializes on first call). */
+const sc_kernels *sc_kernels_active(void);
+
+#endif
