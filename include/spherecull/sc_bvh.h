@@ -1,0 +1,129 @@
+/* spherecull — the acceleration structure: an 8-wide BVH built by binned SAH
+ * whose leaves hold up to N triangles (pre-gathered SoA vertices, like
+ * Embree's triangle4/8) and, optionally, their conservative prefilter spheres
+ * in an SoA block (sc_sphere_block4/8/16 of sc_prefilter.h).
+ *
+ *   sc_bvh_config cfg;
+ *   sc_bvh_config_default(&cfg);              // leaf 4, prefilter off
+ *   cfg.prefilter = SC_PREFILTER_MINIMAL;
+ *   sc_bvh *bvh;
+ *   sc_status s = sc_bvh_build(pos, nverts, idx, ntris, &cfg, &bvh);
+ *   ... sc_trace_closest(bvh, &ray, &hit, NULL) ...   (sc_trace.h)
+ *   sc_bvh_free(bvh);
+ *
+ * The BVH copies what it needs; positions and indices may be freed after the
+ * build. A triangle with a non-finite vertex can never be hit and is left
+ * out of the tree (counted in sc_bvh_info.skipped_triangles).
+ *
+ * Prefilter modes (what the leaf test does before the exact triangle test):
+ *   off      no spheres are stored; every triangle in a visited leaf is tested.
+ *   circum   circumsphere of each triangle (conservative, sc_prefilter_sphere_f).
+ *   minimal  minimal enclosing sphere of each triangle (conservative).
+ *   auto     per leaf: minimal spheres are stored and used only where they are
+ *            expected to pay. At build time SC_BVH_AUTO_SAMPLES isotropic random
+ *            lines through the leaf's box are shot at its spheres; the leaf
+ *            uses them iff the measured fraction of lines that all spheres
+ *            reject (so the triangle test is skipped) is at least
+ *            SC_BVH_AUTO_THRESHOLD, the measured cost ratio sphere block /
+ *            triangle block (bench/bench_trace.c). Deterministic: the lines
+ *            are seeded by leaf.
+ * Every mode returns exactly the same hits; only the work differs.
+ */
+#ifndef SPHERECULL_SC_BVH_H
+#define SPHERECULL_SC_BVH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sc_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SC_BVH_MAX_LEAF 16
+#define SC_BVH_AUTO_SAMPLES 32
+#define SC_BVH_AUTO_THRESHOLD 0.5
+
+typedef enum sc_prefilter_mode {
+    SC_PREFILTER_OFF = 0,
+    SC_PREFILTER_CIRCUM,
+    SC_PREFILTER_MINIMAL,
+    SC_PREFILTER_AUTO,
+    SC_PREFILTER_MODE_COUNT
+} sc_prefilter_mode;
+
+/* The exact ray-triangle test behind the prefilter. */
+typedef enum sc_tri_test {
+    SC_TRI_WATERTIGHT = 0,   /* Woop, Benthin, Wald 2013; double fallback on zero edges */
+    SC_TRI_MOLLER,           /* Moller-Trumbore 1997; not watertight, for comparison */
+    SC_TRI_TEST_COUNT
+} sc_tri_test;
+
+/* Which kernel set traverses the tree. AUTO honours SPHERECULL_ISA
+ * (scalar|sse4|avx2|avx512; sse4 maps to scalar here) and otherwise takes
+ * the best the CPU supports. All kernels return bit-identical hits. */
+typedef enum sc_trace_isa {
+    SC_TRACE_ISA_AUTO = 0,
+    SC_TRACE_ISA_SCALAR,
+    SC_TRACE_ISA_AVX2,
+    SC_TRACE_ISA_AVX512,
+    SC_TRACE_ISA_COUNT
+} sc_trace_isa;
+
+typedef struct sc_bvh_config {
+    int leaf_size;               /* 1..SC_BVH_MAX_LEAF: most triangles per leaf */
+    sc_prefilter_mode prefilter;
+    sc_tri_test tri_test;
+    sc_trace_isa isa;
+    int sah_bins;                /* 4..64 */
+    float traversal_cost;        /* SAH cost of a node visit, relative to one leaf block test */
+} sc_bvh_config;
+
+typedef struct sc_bvh_info {
+    size_t triangles;            /* in the tree */
+    size_t skipped_triangles;    /* non-finite, left out */
+    size_t nodes;                /* 8-wide inner nodes */
+    size_t leaves;
+    size_t leaves_with_spheres;  /* all leaves for circum/minimal, the chosen ones for auto */
+    size_t node_bytes;
+    size_t leaf_bytes;           /* vertices + primitive ids + spheres + alignment */
+    size_t sphere_bytes;         /* the part of leaf_bytes that holds spheres */
+    size_t total_bytes;          /* everything the handle owns */
+    int depth;                   /* of the 8-wide tree, root = 1 */
+    double sah_cost;             /* of the 8-wide tree, in the config's cost units */
+    double build_seconds;
+    sc_trace_isa isa;            /* the kernel set chosen */
+    sc_prefilter_mode prefilter;
+    int leaf_size;
+} sc_bvh_info;
+
+typedef struct sc_bvh sc_bvh;
+
+void sc_bvh_config_default(sc_bvh_config *cfg);
+
+/* positions: 3 floats per vertex; indices: 3 per triangle, each < vertex_count.
+ * triangle_count may be 0 (every ray misses).
+ * Errors: INVALID_ARGUMENT (NULL, index out of range, bad config),
+ * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY, UNSUPPORTED (the ISA
+ * asked for is not available on this CPU). */
+sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
+                       size_t triangle_count, const sc_bvh_config *cfg, sc_bvh **out);
+void sc_bvh_free(sc_bvh *bvh);
+sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
+
+/* "off", "circum", "minimal", "auto"; "watertight", "moller";
+ * "auto", "scalar", "avx2", "avx512". */
+const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
+sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);
+const char *sc_tri_test_name(sc_tri_test test);
+sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out);
+const char *sc_trace_isa_name(sc_trace_isa isa);
+sc_status sc_trace_isa_from_name(const char *name, sc_trace_isa *out);
+/* 1 if this CPU (and build) can run the kernel set. */
+int sc_trace_isa_supported(sc_trace_isa isa);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

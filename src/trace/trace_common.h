@@ -1,0 +1,154 @@
+/* Pieces every traversal kernel shares, so that all ISAs produce
+ * bit-identical hits: the per-ray set-up, the slab-test padding, the
+ * watertight test's double-precision fallback and the child ordering.
+ *
+ * The arithmetic of every kernel is fixed by this file and by
+ * traverse_scalar.c (the specification): no FMA (-ffp-contract=off, and the
+ * SIMD kernels use separate multiplies and subtracts), operations in the
+ * same order, max(a,b) = a > b ? a : b like (v)maxps.
+ */
+#ifndef SPHERECULL_TRACE_COMMON_H
+#define SPHERECULL_TRACE_COMMON_H
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "bvh/bvh_internal.h"
+
+/* Robust slab test in the spirit of Ize 2013, with one FMA per plane.
+ * A slab distance is computed as t = fma(p, rd, -ord) with rd = fl(1/d) and
+ * ord = fl(o rd). Expanding the roundings,
+ *     t = tau (1+d1)(1+d3) - o rd d2 (1+d3),   |di| <= u = 2^-24,
+ * so |t - tau| <= 3u |t| + 2u |o rd| for the exact distance tau = (p-o)/d.
+ * Entry distances are therefore moved down by 8u |t| + eps and exit
+ * distances up by the same, with the per-ray eps = 4u max_k |o_k rd_k|:
+ * the computed interval contains the exact one, so a ray that truly meets a
+ * box (whose float bounds are exact min/max of float vertices) is never
+ * culled. (Needs tmin >= 0, which sc_ray_valid enforces; an entry distance
+ * is then never negative before the padding.) */
+#define SC_SLAB_DOWN (1.0f - 0x1p-21f)
+#define SC_SLAB_UP (1.0f + 0x1p-21f)
+/* Directions below this magnitude are replaced by it (with their sign), as
+ * Embree does, so 1/d is finite and no slab distance is 0 * inf = NaN. */
+#define SC_MIN_RCP_INPUT 1e-18f
+/* |o| * 1/SC_MIN_RCP_INPUT must stay finite in float. */
+#define SC_MAX_ORIGIN 1e18f
+
+static inline float sc_fmax(float a, float b) { return a > b ? a : b; }
+static inline float sc_fmin(float a, float b) { return a < b ? a : b; }
+
+typedef struct sc_ray_pre {
+    float org[3], dir[3], tmin, tmax;
+    float rd[3], ord[3], slab_eps;
+    int near_row[3], far_row[3];   /* rows of sc_bvh_node8.b */
+    int kx, ky, kz;                /* watertight: kz = axis of largest |d| */
+    float Sx, Sy, Sz;
+} sc_ray_pre;
+
+static inline int sc_ray_valid(const sc_ray *r)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(fabsf(r->org[k]) < SC_MAX_ORIGIN) || !isfinite(r->dir[k]))
+            return 0;
+    if (r->dir[0] == 0 && r->dir[1] == 0 && r->dir[2] == 0)
+        return 0;
+    return r->tmin >= 0 && !isnan(r->tmax);
+}
+
+static inline void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p)
+{
+    for (int k = 0; k < 3; k++) {
+        p->org[k] = r->org[k];
+        p->dir[k] = r->dir[k];
+        float d = r->dir[k];
+        if (fabsf(d) < SC_MIN_RCP_INPUT)
+            d = copysignf(SC_MIN_RCP_INPUT, d);
+        p->rd[k] = 1.0f / d;
+        p->ord[k] = p->org[k] * p->rd[k];
+        int neg = signbit(p->rd[k]) != 0;
+        p->near_row[k] = 2 * k + neg;
+        p->far_row[k] = 2 * k + 1 - neg;
+    }
+    p->slab_eps = 0x1p-22f * sc_fmax(fabsf(p->ord[0]), sc_fmax(fabsf(p->ord[1]), fabsf(p->ord[2])));
+    p->tmin = r->tmin;
+    p->tmax = r->tmax;
+    const float *d = r->dir;
+    int kz = 0;
+    if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
+    if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0) {          /* keep the winding (matters only for one-sided tests) */
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    p->kx = kx, p->ky = ky, p->kz = kz;
+    p->Sx = d[kx] / d[kz];
+    p->Sy = d[ky] / d[kz];
+    p->Sz = 1.0f / d[kz];
+}
+
+/* Woop et al. 2013, section 4: when an edge function is exactly zero in
+ * float, all three are recomputed in double from the same float inputs. The
+ * products of floats are exact in double, so U(a,b) = -U(b,a) still holds
+ * and a neighbouring triangle sees the same decision. Returns 1 on a hit in
+ * [tmin, tmax] and writes t and the barycentrics. */
+static inline int sc_watertight_double(float Ax, float Ay, float Bx, float By, float Cx, float Cy,
+                                       float Az, float Bz, float Cz, float tmin, float tmax,
+                                       float *t, float *u, float *v)
+{
+    double U = (double)Cx * By - (double)Cy * Bx;
+    double V = (double)Ax * Cy - (double)Ay * Cx;
+    double W = (double)Bx * Ay - (double)By * Ax;
+    if ((U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0))
+        return 0;
+    double det = U + V + W;
+    if (det == 0)
+        return 0;
+    double T = U * Az + V * Bz + W * Cz;
+    float tt = (float)(T / det);
+    if (!(tt >= tmin && tt <= tmax))
+        return 0;
+    *t = tt;
+    *u = (float)(V / det);
+    *v = (float)(W / det);
+    return 1;
+}
+
+typedef struct sc_stack_entry {
+    uint64_t ref;
+    float dist;
+} sc_stack_entry;
+
+/* Near-first order: the hit children sorted by entry distance (ties by slot),
+ * all but the nearest pushed far-to-near; returns the nearest. */
+static inline uint64_t sc_order_children(const sc_bvh_node8 *node, unsigned mask, const float *dist,
+                                         sc_stack_entry *stack, int *sp)
+{
+    uint64_t ref[SC_BVH_N];
+    float d[SC_BVH_N];
+    int k = 0;
+    while (mask) {
+        int i = __builtin_ctz(mask);
+        mask &= mask - 1;
+        float di = dist[i];
+        int j = k++;
+        while (j > 0 && d[j - 1] > di) {
+            d[j] = d[j - 1];
+            ref[j] = ref[j - 1];
+            j--;
+        }
+        d[j] = di;
+        ref[j] = node->child[i];
+    }
+    for (int j = k - 1; j > 0; j--) {
+        stack[*sp].ref = ref[j];
+        stack[*sp].dist = d[j];
+        (*sp)++;
+    }
+    return ref[0];
+}
+
+#endif

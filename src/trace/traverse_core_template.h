@@ -1,0 +1,170 @@
+/* The traversal loop, instantiated once per ISA. The including file defines
+ *   KFN(name)        suffixes a name with the ISA
+ *   KATTR            the function attributes (target ISA)
+ *   KCTX             per-ray broadcast state, filled by KFN(ctx_init)
+ *   KFN(node_test)   8 child boxes -> hit mask + entry distances
+ *   KFN(leaf_test)   one leaf block -> hit mask + t, barycentric numerators, denominators
+ * and this file makes the kernel table KFN(sc_trace_kernels).
+ *
+ * One body serves closest/any and with/without statistics: the flags are
+ * compile-time constants of always-inlined code, so the statistics-free
+ * kernels contain no counting at all.
+ */
+
+static inline uint32_t KFN(reject)(const sc_ray *ray, const float *blk, unsigned W)
+{
+    if (W == 4)
+        return sc_reject4(ray, (const sc_sphere_block4 *)(const void *)blk);
+    if (W == 8)
+        return sc_reject8(ray, (const sc_sphere_block8 *)(const void *)blk);
+    return sc_reject16(ray, (const sc_sphere_block16 *)(const void *)blk);
+}
+
+/* Pushed children are touched later: start loading their first lines now. */
+static inline __attribute__((always_inline)) void KFN(prefetch)(const sc_bvh *bvh, uint64_t ref)
+{
+    const char *p = sc_ref_is_leaf(ref) ? (const char *)bvh->leaves + sc_ref_offset(ref)
+                                        : (const char *)bvh->nodes + ref;
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 128);
+}
+
+static inline __attribute__((always_inline)) KATTR int
+KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
+          const int ANY, const int STATS, const int MOLLER)
+{
+    sc_ray_pre p;
+    sc_ray_precompute(ray, &p);
+    KCTX ctx;
+    KFN(ctx_init)(&ctx, &p);
+    const float tmin = ray->tmin;
+    float tmax = ray->tmax;
+    sc_ray cur = *ray;
+    uint32_t best_prim = SC_HITREC_MISS;
+    float best_u = 0, best_v = 0;
+    sc_stack_entry stack[SC_TRACE_STACK];
+    int sp = 0;
+    if (STATS)
+        st->rays++;
+    if (!bvh->has_root)
+        goto done;
+
+    uint64_t ref = 0;                  /* the root, nodes[0] */
+    for (;;) {
+        while (!sc_ref_is_leaf(ref)) {
+            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+            if (STATS)
+                st->nodes++;
+            float dist[SC_BVH_N] __attribute__((aligned(32)));
+            unsigned m = KFN(node_test)(&ctx, node, tmin, tmax, dist);
+            if (!m)
+                goto pop;
+            if ((m & (m - 1)) == 0) {
+                ref = node->child[__builtin_ctz(m)];
+                continue;
+            }
+            if (ANY) {
+                /* Any hit ends the search, so order buys nothing (as in
+                 * Embree's occlusion traversal): push all but the first. */
+                ref = node->child[__builtin_ctz(m)];
+                for (m &= m - 1; m; m &= m - 1) {
+                    uint64_t c = node->child[__builtin_ctz(m)];
+                    KFN(prefetch)(bvh, c);
+                    stack[sp].ref = c;
+                    stack[sp].dist = 0;
+                    sp++;
+                }
+                continue;
+            }
+            ref = sc_order_children(node, m, dist, stack, &sp);
+        }
+        {
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *rows = (const float *)(const void *)(bvh->leaves + sc_ref_offset(ref));
+            unsigned live = (1u << n) - 1;
+            if (STATS)
+                st->leaves++;
+            if (sc_ref_has_spheres(ref)) {
+                cur.tmax = tmax;
+                uint32_t rej = KFN(reject)(&cur, rows, W) & live;
+                if (STATS) {
+                    st->sphere_tests += n;
+                    st->sphere_rejects += (uint64_t)__builtin_popcount(rej);
+                }
+                live &= ~rej;
+                rows += 4 * W;
+            }
+            if (live) {
+                float t[16] __attribute__((aligned(64)));
+                float un[16] __attribute__((aligned(64)));
+                float vn[16] __attribute__((aligned(64)));
+                float den[16] __attribute__((aligned(64)));
+                if (STATS)
+                    st->tri_tests += (uint64_t)__builtin_popcount(live);
+                unsigned hm = KFN(leaf_test)(&ctx, rows, W, live, tmin, tmax, MOLLER, t, un, vn, den);
+                if (hm) {
+                    if (STATS)
+                        st->tri_hits += (uint64_t)__builtin_popcount(hm);
+                    if (ANY)
+                        return 1;
+                    int bi = __builtin_ctz(hm);
+                    for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
+                        int i = __builtin_ctz(rest);
+                        if (t[i] < t[bi])
+                            bi = i;
+                    }
+                    tmax = t[bi];
+                    best_prim = ((const uint32_t *)(const void *)(rows + 9 * W))[bi];
+                    best_u = un[bi] / den[bi];
+                    best_v = vn[bi] / den[bi];
+                }
+            }
+        }
+    pop:
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+        } while (!ANY && stack[sp].dist > tmax);
+        ref = stack[sp].ref;
+    }
+done:
+    if (!ANY) {
+        hit->prim = best_prim;
+        hit->t = best_prim == SC_HITREC_MISS ? ray->tmax : tmax;
+        hit->u = best_u;
+        hit->v = best_v;
+    }
+    return 0;
+}
+
+#define SC_DEFINE_KERNELS(TEST, MOLLER_FLAG)                                                           \
+    static KATTR void KFN(closest_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)              \
+    {                                                                                                  \
+        KFN(core)(b, r, h, NULL, 0, 0, MOLLER_FLAG);                                                   \
+    }                                                                                                  \
+    static KATTR int KFN(any_##TEST)(const sc_bvh *b, const sc_ray *r)                                 \
+    {                                                                                                  \
+        return KFN(core)(b, r, NULL, NULL, 1, 0, MOLLER_FLAG);                                         \
+    }                                                                                                  \
+    static KATTR void KFN(closest_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h,        \
+                                                sc_trace_stats *s)                                     \
+    {                                                                                                  \
+        KFN(core)(b, r, h, s, 0, 1, MOLLER_FLAG);                                                      \
+    }                                                                                                  \
+    static KATTR int KFN(any_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)        \
+    {                                                                                                  \
+        return KFN(core)(b, r, NULL, s, 1, 1, MOLLER_FLAG);                                            \
+    }
+
+SC_DEFINE_KERNELS(watertight, 0)
+SC_DEFINE_KERNELS(moller, 1)
+#undef SC_DEFINE_KERNELS
+
+const sc_trace_kernels KFN(sc_trace_kernels)[SC_TRI_TEST_COUNT] = {
+    [SC_TRI_WATERTIGHT] = { KFN(closest_watertight), KFN(any_watertight),
+                            KFN(closest_stats_watertight), KFN(any_stats_watertight) },
+    [SC_TRI_MOLLER] = { KFN(closest_moller), KFN(any_moller),
+                        KFN(closest_stats_moller), KFN(any_stats_moller) },
+};

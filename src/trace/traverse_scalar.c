@@ -1,0 +1,162 @@
+/* Portable kernels: the specification every SIMD kernel must match bit for
+ * bit (same operations, same order, no FMA), and the fallback for CPUs
+ * without AVX2. */
+#include "trace_common.h"
+
+#define KFN(name) name##_scalar
+#define KATTR
+typedef struct { const sc_ray_pre *p; } ctx_scalar;
+#define KCTX ctx_scalar
+
+static inline void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p) { c->p = p; }
+
+static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,
+                                      float *dist)
+{
+    const sc_ray_pre *p = c->p;
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        float tn[3], tf[3];
+        for (int k = 0; k < 3; k++) {
+            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord[k]);
+            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord[k]);
+        }
+        float a = sc_fmax(sc_fmax(tn[0], tn[1]), sc_fmax(tn[2], tmin));
+        float b = sc_fmin(sc_fmin(tf[0], tf[1]), sc_fmin(tf[2], tmax));
+        a = fmaf(a, SC_SLAB_DOWN, -p->slab_eps);
+        b = fmaf(b, SC_SLAB_UP, p->slab_eps);
+        dist[i] = a;
+        mask |= (unsigned)(a <= b) << i;
+    }
+    return mask;
+}
+
+/* Watertight test of one lane (Woop, Benthin, Wald 2013). */
+static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
+                                  float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+    const int kx = p->kx, ky = p->ky, kz = p->kz;
+    float A[3], B[3], C[3];
+    for (int k = 0; k < 3; k++) {
+        A[k] = rows[(0 + k) * W + i] - p->org[k];
+        B[k] = rows[(3 + k) * W + i] - p->org[k];
+        C[k] = rows[(6 + k) * W + i] - p->org[k];
+    }
+    float Ax = A[kx] - p->Sx * A[kz], Ay = A[ky] - p->Sy * A[kz];
+    float Bx = B[kx] - p->Sx * B[kz], By = B[ky] - p->Sy * B[kz];
+    float Cx = C[kx] - p->Sx * C[kz], Cy = C[ky] - p->Sy * C[kz];
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float Wf = Bx * Ay - By * Ax;
+    float Az = p->Sz * A[kz], Bz = p->Sz * B[kz], Cz = p->Sz * C[kz];
+    if (U == 0 || V == 0 || Wf == 0) {
+        float u, v;
+        if (!sc_watertight_double(Ax, Ay, Bx, By, Cx, Cy, Az, Bz, Cz, tmin, tmax, t, &u, &v))
+            return 0;
+        *un = u, *vn = v, *den = 1;
+        return 1;
+    }
+    if ((U < 0 || V < 0 || Wf < 0) && (U > 0 || V > 0 || Wf > 0))
+        return 0;
+    float det = (U + V) + Wf;
+    if (det == 0)
+        return 0;
+    float T = (U * Az + V * Bz) + Wf * Cz;
+    float tt = T / det;
+    if (!(tt >= tmin && tt <= tmax))
+        return 0;
+    *t = tt, *un = V, *vn = Wf, *den = det;
+    return 1;
+}
+
+/* Moller-Trumbore 1997, both faces. */
+static inline int lane_moller(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
+                              float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+    float v0[3], e1[3], e2[3], s[3];
+    for (int k = 0; k < 3; k++) {
+        v0[k] = rows[k * W + i];
+        e1[k] = rows[(3 + k) * W + i] - v0[k];
+        e2[k] = rows[(6 + k) * W + i] - v0[k];
+        s[k] = p->org[k] - v0[k];
+    }
+    const float *d = p->dir;
+    float px = d[1] * e2[2] - d[2] * e2[1];
+    float py = d[2] * e2[0] - d[0] * e2[2];
+    float pz = d[0] * e2[1] - d[1] * e2[0];
+    float det = (e1[0] * px + e1[1] * py) + e1[2] * pz;
+    float inv = 1.0f / det;
+    float u = ((s[0] * px + s[1] * py) + s[2] * pz) * inv;
+    float qx = s[1] * e1[2] - s[2] * e1[1];
+    float qy = s[2] * e1[0] - s[0] * e1[2];
+    float qz = s[0] * e1[1] - s[1] * e1[0];
+    float v = ((d[0] * qx + d[1] * qy) + d[2] * qz) * inv;
+    float tt = ((e2[0] * qx + e2[1] * qy) + e2[2] * qz) * inv;
+    if (det != 0 && u >= 0 && v >= 0 && u + v <= 1 && tt >= tmin && tt <= tmax) {
+        *t = tt, *un = u, *vn = v, *den = 1;
+        return 1;
+    }
+    return 0;
+}
+
+static inline unsigned KFN(leaf_test)(const KCTX *c, const float *rows, unsigned W, unsigned live,
+                                      float tmin, float tmax, int moller, float *t, float *un,
+                                      float *vn, float *den)
+{
+    unsigned hm = 0;
+    for (unsigned m = live; m; m &= m - 1) {
+        unsigned i = (unsigned)__builtin_ctz(m);
+        int h = moller ? lane_moller(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i])
+                       : lane_watertight(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i]);
+        hm |= (unsigned)h << i;
+    }
+    return hm;
+}
+
+#include "traverse_core_template.h"
+
+/* Every leaf, no box tests, no prefilter: a same-arithmetic oracle for the
+ * traversal (it can only differ on exact ties in t). */
+sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit)
+{
+    if (!bvh || !ray || !hit || !sc_ray_valid(ray))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_ray_pre p;
+    sc_ray_precompute(ray, &p);
+    ctx_scalar c = { &p };
+    float tmax = ray->tmax;
+    hit->prim = SC_HITREC_MISS;
+    hit->t = ray->tmax;
+    hit->u = hit->v = 0;
+    if (!bvh->has_root)
+        return SC_OK;
+    const int moller = bvh->cfg.tri_test == SC_TRI_MOLLER;
+    for (size_t ni = 0; ni < bvh->node_count; ni++) {
+        const sc_bvh_node8 *node = &bvh->nodes[ni];
+        for (int s = 0; s < SC_BVH_N; s++) {
+            uint64_t ref = node->child[s];
+            if (!sc_ref_is_leaf(ref))
+                continue;
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *rows = (const float *)(const void *)(bvh->leaves + sc_ref_offset(ref));
+            if (sc_ref_has_spheres(ref))
+                rows += 4 * W;
+            float t[16], un[16], vn[16], den[16];
+            unsigned hm = leaf_test_scalar(&c, rows, W, (1u << n) - 1, ray->tmin, tmax, moller, t, un, vn, den);
+            if (!hm)
+                continue;
+            int bi = __builtin_ctz(hm);
+            for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
+                int i = __builtin_ctz(rest);
+                if (t[i] < t[bi])
+                    bi = i;
+            }
+            tmax = t[bi];
+            hit->t = t[bi];
+            hit->prim = ((const uint32_t *)(const void *)(rows + 9 * W))[bi];
+            hit->u = un[bi] / den[bi];
+            hit->v = vn[bi] / den[bi];
+        }
+    }
+    return SC_OK;
+}

@@ -1,0 +1,202 @@
+/* x86 node and leaf kernels, included once per ISA by traverse_x86.c with
+ *   KFN(name), KATTR (target attribute) and SC_X86_AVX512 (0 or 1).
+ * 8-wide box tests in ymm registers; leaf blocks of 4 and 8 lanes in one ymm
+ * pass, 16 lanes in two (AVX2) or one zmm pass (AVX-512). The arithmetic is
+ * that of traverse_scalar.c, operation for operation. */
+
+typedef struct {
+    __m256 ord[3], rd[3], eps;
+    size_t near_off[3], far_off[3];      /* byte offsets of rows in a node */
+    float okx, oky, okz, Sx, Sy, Sz;
+    float org_s[3], dir_s[3];
+    int kx, ky, kz;
+} KFN(ctx);
+#define KCTX KFN(ctx)
+
+static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
+{
+    for (int k = 0; k < 3; k++) {
+        c->ord[k] = _mm256_set1_ps(p->ord[k]);
+        c->rd[k] = _mm256_set1_ps(p->rd[k]);
+        c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
+        c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
+        c->org_s[k] = p->org[k];
+        c->dir_s[k] = p->dir[k];
+    }
+    c->eps = _mm256_set1_ps(p->slab_eps);
+    c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
+    c->okx = p->org[p->kx], c->oky = p->org[p->ky], c->okz = p->org[p->kz];
+    c->Sx = p->Sx, c->Sy = p->Sy, c->Sz = p->Sz;
+}
+
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, float *dist)
+{
+    const char *nb = (const char *)node;
+#define ROW(off) _mm256_load_ps((const float *)(const void *)(nb + (off)))
+    __m256 tnx = _mm256_fmsub_ps(ROW(c->near_off[0]), c->rd[0], c->ord[0]);
+    __m256 tny = _mm256_fmsub_ps(ROW(c->near_off[1]), c->rd[1], c->ord[1]);
+    __m256 tnz = _mm256_fmsub_ps(ROW(c->near_off[2]), c->rd[2], c->ord[2]);
+    __m256 tfx = _mm256_fmsub_ps(ROW(c->far_off[0]), c->rd[0], c->ord[0]);
+    __m256 tfy = _mm256_fmsub_ps(ROW(c->far_off[1]), c->rd[1], c->ord[1]);
+    __m256 tfz = _mm256_fmsub_ps(ROW(c->far_off[2]), c->rd[2], c->ord[2]);
+#undef ROW
+    __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, _mm256_set1_ps(tmin)));
+    __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, _mm256_set1_ps(tmax)));
+    tn = _mm256_fmsub_ps(tn, _mm256_set1_ps(SC_SLAB_DOWN), c->eps);
+    tf = _mm256_fmadd_ps(tf, _mm256_set1_ps(SC_SLAB_UP), c->eps);
+    _mm256_store_ps(dist, tn);
+#if SC_X86_AVX512
+    return (unsigned)_mm256_cmp_ps_mask(tn, tf, _CMP_LE_OQ);
+#else
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
+#endif
+}
+
+/* Lanes [h, h+8) of a block of width W (4 lanes are zero-extended). */
+static inline __attribute__((always_inline)) KATTR __m256 KFN(row8)(const float *row, unsigned W, unsigned h)
+{
+    if (W == 4)
+        return _mm256_zextps128_ps256(_mm_load_ps(row));
+    return _mm256_load_ps(row + h);
+}
+
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(mask8)(__m256 m)
+{
+    return (unsigned)_mm256_movemask_ps(m);
+}
+
+/* Watertight test of 8 lanes; returns the hit mask (bit 0 = lane h). */
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
+                 float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+    const int kx = c->kx, ky = c->ky, kz = c->kz;
+    const __m256 okx = _mm256_set1_ps(c->okx), oky = _mm256_set1_ps(c->oky), okz = _mm256_set1_ps(c->okz);
+    const __m256 Sx = _mm256_set1_ps(c->Sx), Sy = _mm256_set1_ps(c->Sy), Sz = _mm256_set1_ps(c->Sz);
+#define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
+    __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
+    __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
+    __m256 Ckz = _mm256_sub_ps(LD(2, kz), okz);
+    __m256 Ax = _mm256_sub_ps(_mm256_sub_ps(LD(0, kx), okx), _mm256_mul_ps(Sx, Akz));
+    __m256 Ay = _mm256_sub_ps(_mm256_sub_ps(LD(0, ky), oky), _mm256_mul_ps(Sy, Akz));
+    __m256 Bx = _mm256_sub_ps(_mm256_sub_ps(LD(1, kx), okx), _mm256_mul_ps(Sx, Bkz));
+    __m256 By = _mm256_sub_ps(_mm256_sub_ps(LD(1, ky), oky), _mm256_mul_ps(Sy, Bkz));
+    __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(2, kx), okx), _mm256_mul_ps(Sx, Ckz));
+    __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(2, ky), oky), _mm256_mul_ps(Sy, Ckz));
+#undef LD
+    __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
+    __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
+    __m256 Wv = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
+                              _mm256_cmp_ps(Wv, zero, _CMP_LT_OQ));
+    __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
+                              _mm256_cmp_ps(Wv, zero, _CMP_GT_OQ));
+    __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), Wv);
+    __m256 ok = _mm256_andnot_ps(_mm256_and_ps(neg, pos), _mm256_cmp_ps(det, zero, _CMP_NEQ_UQ));
+    __m256 zr = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
+                             _mm256_cmp_ps(Wv, zero, _CMP_EQ_OQ));
+    unsigned zmask = KFN(mask8)(zr) & live;
+    unsigned cand = KFN(mask8)(ok) & live & ~zmask;
+    unsigned hm = 0;
+    __m256 Az = _mm256_mul_ps(Sz, Akz), Bz = _mm256_mul_ps(Sz, Bkz), Cz = _mm256_mul_ps(Sz, Ckz);
+    if (cand) {
+        __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, Az), _mm256_mul_ps(V, Bz)), _mm256_mul_ps(Wv, Cz));
+        __m256 tt = _mm256_div_ps(T, det);
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(tt, _mm256_set1_ps(tmin), _CMP_GE_OQ),
+                                  _mm256_cmp_ps(tt, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+        hm = KFN(mask8)(in) & cand;
+        if (hm) {
+            _mm256_storeu_ps(t + h, tt);
+            _mm256_storeu_ps(un + h, V);
+            _mm256_storeu_ps(vn + h, Wv);
+            _mm256_storeu_ps(den + h, det);
+        }
+    }
+    if (__builtin_expect(zmask != 0, 0)) {
+        float ax[8], ay[8], bx[8], by[8], cx[8], cy[8], az[8], bz[8], cz[8];
+        _mm256_storeu_ps(ax, Ax), _mm256_storeu_ps(ay, Ay), _mm256_storeu_ps(bx, Bx);
+        _mm256_storeu_ps(by, By), _mm256_storeu_ps(cx, Cx), _mm256_storeu_ps(cy, Cy);
+        _mm256_storeu_ps(az, Az), _mm256_storeu_ps(bz, Bz), _mm256_storeu_ps(cz, Cz);
+        for (unsigned m = zmask; m; m &= m - 1) {
+            unsigned i = (unsigned)__builtin_ctz(m);
+            float u, v;
+            if (sc_watertight_double(ax[i], ay[i], bx[i], by[i], cx[i], cy[i], az[i], bz[i], cz[i],
+                                     tmin, tmax, &t[h + i], &u, &v)) {
+                un[h + i] = u, vn[h + i] = v, den[h + i] = 1;
+                hm |= 1u << i;
+            }
+        }
+    }
+    return hm;
+}
+
+/* Moller-Trumbore on 8 lanes, the operations of lane_moller. */
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(moller8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
+             float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+#define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
+    __m256 v0[3], e1[3], e2[3], s[3], d[3];
+    for (int k = 0; k < 3; k++) {
+        v0[k] = LD(0, k);
+        e1[k] = _mm256_sub_ps(LD(1, k), v0[k]);
+        e2[k] = _mm256_sub_ps(LD(2, k), v0[k]);
+        s[k] = _mm256_sub_ps(_mm256_set1_ps(c->org_s[k]), v0[k]);
+        d[k] = _mm256_set1_ps(c->dir_s[k]);
+    }
+#undef LD
+#define MUL _mm256_mul_ps
+#define SUB _mm256_sub_ps
+#define ADD _mm256_add_ps
+    __m256 px = SUB(MUL(d[1], e2[2]), MUL(d[2], e2[1]));
+    __m256 py = SUB(MUL(d[2], e2[0]), MUL(d[0], e2[2]));
+    __m256 pz = SUB(MUL(d[0], e2[1]), MUL(d[1], e2[0]));
+    __m256 det = ADD(ADD(MUL(e1[0], px), MUL(e1[1], py)), MUL(e1[2], pz));
+    __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
+    __m256 u = MUL(ADD(ADD(MUL(s[0], px), MUL(s[1], py)), MUL(s[2], pz)), inv);
+    __m256 qx = SUB(MUL(s[1], e1[2]), MUL(s[2], e1[1]));
+    __m256 qy = SUB(MUL(s[2], e1[0]), MUL(s[0], e1[2]));
+    __m256 qz = SUB(MUL(s[0], e1[1]), MUL(s[1], e1[0]));
+    __m256 v = MUL(ADD(ADD(MUL(d[0], qx), MUL(d[1], qy)), MUL(d[2], qz)), inv);
+    __m256 tt = MUL(ADD(ADD(MUL(e2[0], qx), MUL(e2[1], qy)), MUL(e2[2], qz)), inv);
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 ok = _mm256_and_ps(_mm256_cmp_ps(det, zero, _CMP_NEQ_UQ), _mm256_cmp_ps(u, zero, _CMP_GE_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(v, zero, _CMP_GE_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(ADD(u, v), _mm256_set1_ps(1.0f), _CMP_LE_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(tt, _mm256_set1_ps(tmin), _CMP_GE_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(tt, _mm256_set1_ps(tmax), _CMP_LE_OQ));
+#undef MUL
+#undef SUB
+#undef ADD
+    unsigned hm = KFN(mask8)(ok) & live;
+    if (hm) {
+        _mm256_storeu_ps(t + h, tt);
+        _mm256_storeu_ps(un + h, u);
+        _mm256_storeu_ps(vn + h, v);
+        _mm256_storeu_ps(den + h, _mm256_set1_ps(1.0f));
+    }
+    return hm;
+}
+
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(leaf_test)(const KCTX *c, const float *rows, unsigned W, unsigned live, float tmin, float tmax,
+               int moller, float *t, float *un, float *vn, float *den)
+{
+    unsigned hm;
+    if (moller) {
+        hm = KFN(moller8)(c, rows, W, 0, live & 0xff, tmin, tmax, t, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= KFN(moller8)(c, rows, W, 8, live >> 8, tmin, tmax, t, un, vn, den) << 8;
+    } else {
+        hm = KFN(watertight8)(c, rows, W, 0, live & 0xff, tmin, tmax, t, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= KFN(watertight8)(c, rows, W, 8, live >> 8, tmin, tmax, t, un, vn, den) << 8;
+    }
+    return hm;
+}
+
+#include "traverse_core_template.h"
+#undef KCTX

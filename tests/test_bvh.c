@@ -1,0 +1,446 @@
+/* BVH + traversal against a brute-force double-precision oracle
+ * (bvh_test_util.h), for every leaf size and prefilter mode, on procedural
+ * scenes and (if present) the shared bunny.
+ *
+ * Per ray, with the oracle's tolerances:
+ *   (1) a reported hit on triangle p at t: p is a relaxed hit of the oracle
+ *       and |t - t_oracle(p)| <= tol(p);
+ *   (2) no robust oracle hit is clearly nearer than the reported t, and a
+ *       reported miss means there is no robust hit at all;
+ * so a different primitive than the oracle's nearest is accepted only at a
+ * tie (same t within tolerance) next to an edge. Every prefilter mode must
+ * return bit-identical hits to mode off, and any-hit must agree with
+ * closest-hit on hit/miss. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include "bvh_test_util.h"
+#include "spherecull/sc_bvh.h"
+#include "spherecull/sc_trace.h"
+
+#define NRAYS 100000
+
+typedef struct scene_case {
+    const char *name;
+    tmesh m;
+    sc_ray *rays;
+    size_t nrays;
+    oracle orc;
+    oracle_hit *ref;
+} scene_case;
+
+static void make_rays(scene_case *sc, size_t n, uint64_t seed)
+{
+    const tmesh *m = &sc->m;
+    double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (size_t i = 0; i < m->nv; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m->pos[3 * i + k]);
+            hi[k] = fmax(hi[k], m->pos[3 * i + k]);
+        }
+    sc_rng r;
+    sc_rng_seed(&r, seed);
+    sc->rays = malloc(n * sizeof(sc_ray));
+    sc->nrays = n;
+    for (size_t i = 0; i < n; i++) {
+        sc_ray *ray = &sc->rays[i];
+        double o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            double e = hi[k] - lo[k];
+            o[k] = sc_rng_range(&r, lo[k] - 0.5 * e, hi[k] + 0.5 * e);
+        }
+        if (i % 2 == 0) {
+            /* Aimed at a random point of a random triangle. */
+            size_t t = (size_t)(sc_rng_uniform(&r) * (double)m->nt);
+            double a = sc_rng_uniform(&r), b = sc_rng_uniform(&r);
+            if (a + b > 1) a = 1 - a, b = 1 - b;
+            for (int k = 0; k < 3; k++) {
+                double p0 = m->pos[3 * m->idx[3 * t] + k], p1 = m->pos[3 * m->idx[3 * t + 1] + k],
+                       p2 = m->pos[3 * m->idx[3 * t + 2] + k];
+                d[k] = p0 + a * (p1 - p0) + b * (p2 - p0) - o[k];
+            }
+        } else {
+            double z = sc_rng_range(&r, -1, 1), ph = sc_rng_range(&r, 0, 6.283185307179586), s = sqrt(1 - z * z);
+            d[0] = s * cos(ph), d[1] = s * sin(ph), d[2] = z;
+        }
+        for (int k = 0; k < 3; k++) {
+            ray->org[k] = (float)o[k];
+            ray->dir[k] = (float)d[k];
+        }
+        if (ray->dir[0] == 0 && ray->dir[1] == 0 && ray->dir[2] == 0)
+            ray->dir[0] = 1;
+        ray->tmin = 0;
+        ray->tmax = INFINITY;
+        if (i % 5 == 0)                  /* aimed rays reach their target at t = 1 */
+            ray->tmax = (float)sc_rng_range(&r, 0.2, 1.5);
+        if (i % 11 == 0)
+            ray->tmin = (float)sc_rng_range(&r, 0, 0.8);
+    }
+    oracle_init(&sc->orc, m);
+    sc->ref = malloc(n * sizeof(oracle_hit));
+    for (size_t i = 0; i < n; i++)
+        oracle_trace(&sc->orc, &sc->rays[i], &sc->ref[i]);
+}
+
+static void scene_free(scene_case *sc)
+{
+    tmesh_free(&sc->m);
+    free(sc->rays);
+    free(sc->ref);
+    oracle_free(&sc->orc);
+}
+
+typedef struct check_result {
+    size_t hits, bad, prim_diff;
+    double max_terr;      /* max |t - t_oracle| / tol */
+} check_result;
+
+static void check_against_oracle(const scene_case *sc, const sc_hitrec *h, check_result *res, const char *what)
+{
+    memset(res, 0, sizeof *res);
+    for (size_t i = 0; i < sc->nrays; i++) {
+        const oracle_hit *o = &sc->ref[i];
+        const sc_ray *ray = &sc->rays[i];
+        int ok = 1;
+        if (h[i].prim == SC_HITREC_MISS) {
+            ok = isinf(o->t_robust);
+        } else {
+            res->hits++;
+            double tp, tol = h[i].prim < sc->orc.n ? oracle_tri(&sc->orc, h[i].prim, ray, &tp) : -1;
+            if (tol < 0 || !(fabs(h[i].t - tp) <= tol)) {
+                ok = 0;
+            } else {
+                double e = tol > 0 ? fabs(h[i].t - tp) / tol : 0;
+                if (e > res->max_terr)
+                    res->max_terr = e;
+                ok = h[i].t - tol <= o->t_robust;
+            }
+            if (h[i].prim != o->prim)
+                res->prim_diff++;
+        }
+        if (!ok) {
+            if (res->bad < 5)
+                print_message("  %s ray %zu: got prim %u t %.9g, oracle prim %u t %.9g robust<=%.9g\n", what, i,
+                              (unsigned)h[i].prim, (double)h[i].t, (unsigned)o->prim, o->t, o->t_robust);
+            res->bad++;
+        }
+    }
+}
+
+static const int leaf_sizes[] = { 1, 4, 8, 16 };
+
+static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, sc_trace_isa isa, sc_tri_test tt)
+{
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.leaf_size = leaf;
+    cfg.prefilter = mode;
+    cfg.isa = isa;
+    cfg.tri_test = tt;
+    sc_bvh *bvh = NULL;
+    assert_int_equal(sc_bvh_build(m->pos, m->nv, m->idx, m->nt, &cfg, &bvh), SC_OK);
+    assert_non_null(bvh);
+    return bvh;
+}
+
+static void trace_all(const sc_bvh *bvh, const scene_case *sc, sc_hitrec *h)
+{
+    for (size_t i = 0; i < sc->nrays; i++)
+        assert_int_equal(sc_trace_closest(bvh, &sc->rays[i], &h[i], NULL), SC_OK);
+}
+
+static int same_hit(const sc_hitrec *a, const sc_hitrec *b)
+{
+    return a->prim == b->prim && memcmp(&a->t, &b->t, sizeof(float)) == 0 &&
+           memcmp(&a->u, &b->u, sizeof(float)) == 0 && memcmp(&a->v, &b->v, sizeof(float)) == 0;
+}
+
+static void run_scene(scene_case *sc)
+{
+    sc_hitrec *h = malloc(sc->nrays * sizeof *h), *off = malloc(sc->nrays * sizeof *off);
+    size_t robust = 0;
+    for (size_t i = 0; i < sc->nrays; i++)
+        robust += !isinf(sc->ref[i].t_robust);
+    print_message("%s: %zu triangles, %zu rays, %zu robust oracle hits\n", sc->name, sc->m.nt, sc->nrays, robust);
+    for (size_t li = 0; li < sizeof leaf_sizes / sizeof leaf_sizes[0]; li++) {
+        for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode++) {
+            sc_bvh *bvh = build(&sc->m, leaf_sizes[li], (sc_prefilter_mode)mode, SC_TRACE_ISA_AUTO, SC_TRI_WATERTIGHT);
+            sc_hitrec *cur = mode == 0 ? off : h;
+            trace_all(bvh, sc, cur);
+            char what[64];
+            snprintf(what, sizeof what, "leaf %d %s", leaf_sizes[li], sc_prefilter_mode_name((sc_prefilter_mode)mode));
+            check_result res;
+            check_against_oracle(sc, cur, &res, what);
+            sc_bvh_info info;
+            assert_int_equal(sc_bvh_get_info(bvh, &info), SC_OK);
+            print_message("  %-18s hits %6zu  bad %zu  prim!=oracle %zu  max|dt|/tol %.3f  %.1f B/tri  sphere leaves %zu/%zu\n",
+                          what, res.hits, res.bad, res.prim_diff, res.max_terr,
+                          (double)info.total_bytes / (double)(info.triangles ? info.triangles : 1),
+                          info.leaves_with_spheres, info.leaves);
+            assert_int_equal(res.bad, 0);
+            /* A prefilter never changes a hit. */
+            if (mode != 0) {
+                size_t diff = 0;
+                for (size_t i = 0; i < sc->nrays; i++)
+                    diff += !same_hit(&h[i], &off[i]);
+                assert_int_equal(diff, 0);
+            }
+            /* any-hit agrees with closest-hit; statistics do not change a hit. */
+            sc_trace_stats st = { 0 };
+            for (size_t i = 0; i < sc->nrays; i += 7) {
+                int occ = -1;
+                assert_int_equal(sc_trace_any(bvh, &sc->rays[i], &occ, NULL), SC_OK);
+                assert_int_equal(occ, cur[i].prim != SC_HITREC_MISS);
+                int occ2 = -1;
+                assert_int_equal(sc_trace_any(bvh, &sc->rays[i], &occ2, &st), SC_OK);
+                assert_int_equal(occ2, occ);
+                sc_hitrec hs;
+                assert_int_equal(sc_trace_closest(bvh, &sc->rays[i], &hs, &st), SC_OK);
+                assert_true(same_hit(&hs, &cur[i]));
+            }
+            assert_true(st.sphere_rejects <= st.sphere_tests);
+            assert_true(st.tri_hits <= st.tri_tests);
+            if (mode == SC_PREFILTER_OFF)
+                assert_int_equal(st.sphere_tests, 0);
+            else if (mode != SC_PREFILTER_AUTO)
+                assert_true(st.sphere_tests > 0);
+            assert_true(st.nodes >= st.rays);
+            sc_bvh_free(bvh);
+        }
+    }
+    free(h);
+    free(off);
+}
+
+static void test_soup(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "soup" };
+    scene_soup(&sc.m, 3000, 0, 1);
+    make_rays(&sc, NRAYS, 11);
+    run_scene(&sc);
+    scene_free(&sc);
+}
+
+static void test_icosphere(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "icosphere" };
+    double c[3] = { 0.1, -0.2, 0.3 };
+    scene_icosphere(&sc.m, 4, 1.0, c);
+    make_rays(&sc, NRAYS, 12);
+    run_scene(&sc);
+    scene_free(&sc);
+}
+
+static void test_slivers(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "slivers" };
+    scene_slivers(&sc.m, 3000, 3);
+    make_rays(&sc, NRAYS, 13);
+    run_scene(&sc);
+    scene_free(&sc);
+}
+
+static void test_offset(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "offset 1e5" };
+    scene_soup(&sc.m, 2000, 1e5, 4);
+    make_rays(&sc, NRAYS, 14);
+    run_scene(&sc);
+    scene_free(&sc);
+}
+
+static void test_bunny(void **state)
+{
+    (void)state;
+    const char *dir = getenv("SC_TEST_SCENES");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/bunny.obj", dir ? dir : "../shared/scenes");
+    scene_case sc = { .name = "bunny" };
+    if (tmesh_read_obj(&sc.m, path) != 0) {
+        tmesh_free(&sc.m);
+        print_message("bunny: %s not readable, skipped\n", path);
+        skip();
+    }
+    make_rays(&sc, NRAYS, 15);
+    run_scene(&sc);
+    scene_free(&sc);
+}
+
+/* Every kernel set returns bit-identical hits (same arithmetic, no FMA). */
+static void test_isa_identical(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "isa" };
+    scene_soup(&sc.m, 2000, 0, 5);
+    scene_slivers(&sc.m, 1000, 6);
+    size_t n = 30000;
+    sc.rays = NULL;
+    make_rays(&sc, n, 16);
+    sc_hitrec *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
+    const int leaves[] = { 3, 4, 8, 12, 16 };
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++)
+        for (size_t li = 0; li < 5; li++)
+            for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode += 2) {
+                sc_bvh *b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, SC_TRACE_ISA_SCALAR, (sc_tri_test)tt);
+                trace_all(b, &sc, ref);
+                sc_bvh_free(b);
+                for (int isa = SC_TRACE_ISA_AVX2; isa < SC_TRACE_ISA_COUNT; isa++) {
+                    if (!sc_trace_isa_supported((sc_trace_isa)isa))
+                        continue;
+                    b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, (sc_trace_isa)isa, (sc_tri_test)tt);
+                    trace_all(b, &sc, h);
+                    size_t diff = 0;
+                    for (size_t i = 0; i < n; i++)
+                        diff += !same_hit(&h[i], &ref[i]);
+                    if (diff)
+                        print_message("%s leaf %d %s %s: %zu differ from scalar\n", sc_tri_test_name((sc_tri_test)tt),
+                                      leaves[li], sc_prefilter_mode_name((sc_prefilter_mode)mode),
+                                      sc_trace_isa_name((sc_trace_isa)isa), diff);
+                    assert_int_equal(diff, 0);
+                    sc_bvh_free(b);
+                }
+            }
+    free(ref);
+    free(h);
+    scene_free(&sc);
+}
+
+/* The brute-force entry point uses the same arithmetic as the traversal,
+ * so on well-conditioned triangles only exact ties in t may differ. (On
+ * triangles that are degenerate at float precision a float test may report
+ * any t, also outside the triangle's box, which the traversal never visits;
+ * hence a soup without slivers here.) */
+static void test_brute_same_arithmetic(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "brute" };
+    scene_soup(&sc.m, 2000, 0, 8);
+    size_t n = 20000;
+    make_rays(&sc, n, 18);
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
+        sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_MINIMAL, SC_TRACE_ISA_AUTO, (sc_tri_test)tt);
+        for (size_t i = 0; i < n; i++) {
+            sc_hitrec bh, th;
+            assert_int_equal(sc_trace_closest_brute(b, &sc.rays[i], &bh), SC_OK);
+            assert_int_equal(sc_trace_closest(b, &sc.rays[i], &th, NULL), SC_OK);
+            assert_int_equal(bh.prim == SC_HITREC_MISS, th.prim == SC_HITREC_MISS);
+            assert_true(bh.prim == th.prim || bh.t == th.t);
+        }
+        sc_bvh_free(b);
+    }
+    scene_free(&sc);
+}
+
+/* Moller-Trumbore is not watertight but must agree with the oracle the
+ * same way on generic rays. */
+static void test_moller(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "moller" };
+    scene_soup(&sc.m, 3000, 0, 7);
+    make_rays(&sc, NRAYS, 17);
+    sc_hitrec *h = malloc(sc.nrays * sizeof *h);
+    sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_OFF, SC_TRACE_ISA_AUTO, SC_TRI_MOLLER);
+    trace_all(b, &sc, h);
+    check_result res;
+    check_against_oracle(&sc, h, &res, "moller");
+    print_message("moller: hits %zu bad %zu prim!=oracle %zu\n", res.hits, res.bad, res.prim_diff);
+    assert_int_equal(res.bad, 0);
+    sc_bvh_free(b);
+    free(h);
+    scene_free(&sc);
+}
+
+static void test_api(void **state)
+{
+    (void)state;
+    float pos[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+    uint32_t idx[3] = { 0, 1, 2 }, bad_idx[3] = { 0, 1, 3 };
+    sc_bvh *b = (sc_bvh *)1;
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(NULL, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_null(b);
+    assert_int_equal(sc_bvh_build(pos, 3, bad_idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    cfg.leaf_size = 0;
+    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    cfg.leaf_size = 17;
+    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_config_default(&cfg);
+    cfg.prefilter = SC_PREFILTER_MODE_COUNT;
+    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+
+    /* Empty scene: every ray misses. */
+    sc_bvh_config_default(&cfg);
+    assert_int_equal(sc_bvh_build(NULL, 0, NULL, 0, &cfg, &b), SC_OK);
+    sc_ray ray = { { 0.25f, 0.25f, -1 }, 0, { 0, 0, 1 }, INFINITY };
+    sc_hitrec h;
+    int occ = 7;
+    assert_int_equal(sc_trace_closest(b, &ray, &h, NULL), SC_OK);
+    assert_int_equal(h.prim, SC_HITREC_MISS);
+    assert_int_equal(sc_trace_any(b, &ray, &occ, NULL), SC_OK);
+    assert_int_equal(occ, 0);
+    sc_bvh_free(b);
+
+    /* One triangle, hit in the middle; both faces; bad rays rejected. */
+    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_OK);
+    assert_int_equal(sc_trace_closest(b, &ray, &h, NULL), SC_OK);
+    assert_int_equal(h.prim, 0);
+    assert_true(fabsf(h.t - 1) < 1e-6f && fabsf(h.u - 0.25f) < 1e-6f && fabsf(h.v - 0.25f) < 1e-6f);
+    sc_ray back = { { 0.25f, 0.25f, 1 }, 0, { 0, 0, -2 }, INFINITY };
+    assert_int_equal(sc_trace_closest(b, &back, &h, NULL), SC_OK);
+    assert_int_equal(h.prim, 0);
+    assert_true(fabsf(h.t - 0.5f) < 1e-6f);
+    back.tmax = 0.49f;
+    assert_int_equal(sc_trace_closest(b, &back, &h, NULL), SC_OK);
+    assert_int_equal(h.prim, SC_HITREC_MISS);
+    sc_ray nan_ray = { { NAN, 0, 0 }, 0, { 0, 0, 1 }, INFINITY };
+    sc_ray zero_dir = { { 0, 0, 0 }, 0, { 0, 0, 0 }, INFINITY };
+    assert_int_equal(sc_trace_closest(b, &nan_ray, &h, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest(b, &zero_dir, &h, NULL), SC_ERR_INVALID_ARGUMENT);
+    sc_ray neg_tmin = { { 0.25f, 0.25f, -1 }, -1, { 0, 0, 1 }, INFINITY };
+    sc_ray far_org = { { 1e19f, 0.25f, -1 }, 0, { -1, 0, 1 }, INFINITY };
+    assert_int_equal(sc_trace_closest(b, &neg_tmin, &h, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_any(b, &far_org, &occ, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest(NULL, &ray, &h, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_any(b, &ray, NULL, NULL), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_free(b);
+
+    /* A triangle with a non-finite vertex is left out. */
+    float posn[12] = { 0, 0, 0, 1, 0, 0, 0, 1, 0, INFINITY, 0, 0 };
+    uint32_t idx2[6] = { 0, 1, 2, 0, 1, 3 };
+    assert_int_equal(sc_bvh_build(posn, 4, idx2, 2, &cfg, &b), SC_OK);
+    sc_bvh_info info;
+    assert_int_equal(sc_bvh_get_info(b, &info), SC_OK);
+    assert_int_equal(info.triangles, 1);
+    assert_int_equal(info.skipped_triangles, 1);
+    sc_bvh_free(b);
+
+    sc_prefilter_mode m;
+    assert_int_equal(sc_prefilter_mode_from_name("minimal", &m), SC_OK);
+    assert_int_equal(m, SC_PREFILTER_MINIMAL);
+    assert_int_equal(sc_prefilter_mode_from_name("bogus", &m), SC_ERR_INVALID_ARGUMENT);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_api),
+        cmocka_unit_test(test_isa_identical),
+        cmocka_unit_test(test_brute_same_arithmetic),
+        cmocka_unit_test(test_soup),
+        cmocka_unit_test(test_icosphere),
+        cmocka_unit_test(test_slivers),
+        cmocka_unit_test(test_offset),
+        cmocka_unit_test(test_moller),
+        cmocka_unit_test(test_bunny),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
