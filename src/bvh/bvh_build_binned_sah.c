@@ -344,7 +344,7 @@ static uint64_t emit_leaf(builder *B, uint32_t bi)
     unsigned n = leaf->b, W = sc_leaf_width(n);
     sc_prefilter_mode mode = B->cfg->prefilter;
     int spheres = mode != SC_PREFILTER_OFF;
-    float sph[4 * 16];
+    _Alignas(64) float sph[4 * 16];   /* passed to sc_reject* as a sphere block */
     if (mode == SC_PREFILTER_AUTO) {
         if (B->dry) {
             leaf_spheres(B, leaf, SC_SPHERE_MINIMAL, W, sph);

@@ -14,6 +14,7 @@ typedef struct sc_command {
 
 int sc_cmd_accuracy(int argc, char **argv);
 int sc_cmd_bench_spheres(int argc, char **argv);
+int sc_cmd_render(int argc, char **argv);
 
 /* One line "spherecull: <command>: <message>" on stderr. */
 void sc_cli_error(const char *command, const char *fmt, ...)

@@ -14,6 +14,7 @@
 static const sc_command commands[] = {
     { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
     { "bench-spheres", "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error", sc_cmd_bench_spheres },
+    { "render", "trace a scene to a PNG: Lambert, shadows, AO, debug views", sc_cmd_render },
 };
 
 void sc_cli_error(const char *command, const char *fmt, ...)

@@ -1,0 +1,150 @@
+/* spherecull — scenes: only what a ray tracer needs.
+ *
+ * A scene is one flat triangle soup (float positions, uint32 indices, one
+ * mesh id per triangle), one RGB colour per mesh, a pinhole camera, lights
+ * and a background. Node transforms are flattened at load time; textures,
+ * normals, animation and bones are not kept.
+ *
+ * Sources (sc_scene_load's spec):
+ *   - a mesh file in any format assimp reads (OBJ, OFF, PLY, STL, glTF, 3DS,
+ *     ...): the camera frames the model and a default light is added;
+ *   - a scene description "*.json" (see scenes/README.md for the format);
+ *   - "proc:KIND:N" procedural scenes of about N triangles (N may end in k or
+ *     M): sphere, soup, slivers, terrain, and "proc:grid:MESH:N", a grid of
+ *     copies of MESH (any other spec) with at least N triangles;
+ *   - "cache:NAME", a mesh in the mesh cache (scripts/fetch-meshes.sh fills it
+ *     from Debian's libcgal-demo): $SPHERECULL_MESHES, else
+ *     ${XDG_CACHE_HOME:-$HOME/.cache}/spherecull/meshes.
+ *
+ * Bad input policy (every case returns a status and a one-line message):
+ *   - unreadable, empty, truncated or malformed files, unknown formats, scenes
+ *     without triangles: SC_ERR_IO or SC_ERR_PARSE;
+ *   - more triangles than options->max_triangles (vertices: 3x that), or more
+ *     pixels than options->max_pixels: SC_ERR_LIMIT, before the big allocation;
+ *   - a triangle with a NaN or infinite vertex is dropped and counted, with a
+ *     warning: one bad vertex should not make a whole model unusable, and a
+ *     dropped triangle cannot feed NaN to the BVH or the prefilter. The bad
+ *     vertex itself is stored as (0,0,0) so no consumer ever reads a NaN;
+ *   - degenerate (zero-area) and duplicate triangles are kept and counted:
+ *     they are legal geometry a tracer must survive;
+ *   - out-of-range indices are an error (SC_ERR_INVALID_ARGUMENT for raw
+ *     buffers, SC_ERR_PARSE in files);
+ *   - a missing material gives the default colour and a warning.
+ *
+ * Warnings go to options->warn (the library never prints); at most
+ * SC_SCENE_MAX_WARNINGS are forwarded per load, then one summary line.
+ */
+#ifndef SPHERECULL_SC_SCENE_H
+#define SPHERECULL_SC_SCENE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sc_camera.h"
+#include "sc_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SC_SCENE_DEFAULT_MAX_TRIANGLES 50000000ull
+#define SC_SCENE_DEFAULT_MAX_PIXELS (1ull << 26)   /* 8192 x 8192 */
+#define SC_SCENE_MAX_IMAGE_SIDE 32768
+#define SC_SCENE_DEFAULT_WIDTH 800
+#define SC_SCENE_DEFAULT_HEIGHT 600
+#define SC_SCENE_MAX_WARNINGS 16
+
+typedef struct sc_scene sc_scene;   /* opaque */
+
+typedef enum sc_light_type {
+    SC_LIGHT_DIRECTIONAL = 0,   /* vec = direction the light travels (unit) */
+    SC_LIGHT_POINT = 1          /* vec = position; falls off as 1/d^2 */
+} sc_light_type;
+
+typedef struct sc_light {
+    sc_light_type type;
+    float vec[3];
+    float color[3];             /* linear RGB, already scaled by intensity */
+} sc_light;
+
+typedef void (*sc_scene_warn_fn)(void *ctx, const char *message);
+
+typedef struct sc_scene_options {
+    uint64_t max_triangles;     /* 0: SC_SCENE_DEFAULT_MAX_TRIANGLES */
+    uint64_t max_pixels;        /* 0: SC_SCENE_DEFAULT_MAX_PIXELS */
+    const char *mesh_cache_dir; /* NULL: $SPHERECULL_MESHES or the XDG default */
+    uint64_t seed;              /* procedural scenes */
+    sc_scene_warn_fn warn;      /* NULL: warnings are only counted */
+    void *warn_ctx;
+} sc_scene_options;
+
+/* Read-only view of a scene; valid until the scene is freed or modified. */
+typedef struct sc_scene_view {
+    const float *positions;     /* 3 floats per vertex */
+    const uint32_t *indices;    /* 3 per triangle, each < num_vertices */
+    const uint32_t *mesh_ids;   /* 1 per triangle, each < num_meshes */
+    const float *mesh_colors;   /* 3 per mesh, linear RGB in [0, 1] */
+    const sc_light *lights;
+    size_t num_vertices, num_triangles, num_meshes, num_lights;
+    sc_camera camera;           /* always valid for sc_camera_frame_make */
+    float background[3];
+    float ambient;              /* constant ambient term in [0, 1] */
+} sc_scene_view;
+
+typedef struct sc_scene_stats {
+    size_t triangles, vertices, meshes;
+    size_t degenerate_triangles;    /* zero area, kept */
+    size_t dropped_nonfinite;       /* triangles dropped for a NaN/Inf vertex */
+    size_t skipped_primitives;      /* points and lines found in mesh files */
+    size_t warnings;                /* all of them, also those not forwarded */
+    size_t bytes;                   /* positions + indices + mesh ids */
+    double bytes_per_triangle;
+    double bounds_min[3], bounds_max[3];
+} sc_scene_stats;
+
+/* Defaults: every field zero/NULL except seed = 1. */
+void sc_scene_options_init(sc_scene_options *options);
+
+/* Loads a scene (see the top of this file for spec). options may be NULL.
+ * On failure *out is NULL and err (if errlen > 0) holds one line without a
+ * trailing newline. */
+sc_status sc_scene_load(const char *spec, const sc_scene_options *options,
+                        sc_scene **out, char *err, size_t errlen);
+
+/* An empty scene for raw buffers: no triangles, default camera, no lights.
+ * The options (cap, warning callback) are copied and apply to later calls. */
+sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out);
+
+/* Appends one mesh; color may be NULL (default grey). Indices must be
+ * < num_vertices. Triangles touching a non-finite vertex are dropped with a
+ * warning. Returns SC_ERR_LIMIT, leaving the scene unchanged, when the cap
+ * would be exceeded. */
+sc_status sc_scene_add_mesh(sc_scene *scene, const float *positions, size_t num_vertices,
+                            const uint32_t *indices, size_t num_triangles,
+                            const float color[3], char *err, size_t errlen);
+
+sc_status sc_scene_add_light(sc_scene *scene, const sc_light *light);
+sc_status sc_scene_set_camera(sc_scene *scene, const sc_camera *camera);
+sc_status sc_scene_set_background(sc_scene *scene, const float rgb[3]);
+
+/* Points the camera at the scene's bounding box from the given azimuth and
+ * elevation (degrees, y up), with vertical fov fov_y_deg and the given image
+ * size, far enough that the whole box is in view. */
+sc_status sc_scene_frame_camera(sc_scene *scene, double azimuth_deg, double elevation_deg,
+                                double fov_y_deg, int width, int height);
+
+/* Adds a white directional key light from above-left of the current camera. */
+sc_status sc_scene_add_default_light(sc_scene *scene);
+
+sc_status sc_scene_get_view(const sc_scene *scene, sc_scene_view *view);
+sc_status sc_scene_get_stats(const sc_scene *scene, sc_scene_stats *stats);
+
+/* Where "cache:NAME" points: writes the directory into buf. */
+sc_status sc_scene_mesh_cache_dir(const sc_scene_options *options, char *buf, size_t buflen);
+
+void sc_scene_free(sc_scene *scene);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

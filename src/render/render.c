@@ -1,0 +1,373 @@
+/* Tile renderer: primary rays through sc_trace_closest, shadow and AO rays
+ * through sc_trace_any. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "common/sc_rng.h"
+#include "spherecull/sc_render.h"
+
+#define TILE 16
+#define PI 3.14159265358979323846
+
+static const char *const debug_names[SC_RENDER_DEBUG_COUNT] = { "shaded", "normals", "depth", "id",
+                                                                "heat" };
+
+const char *sc_render_debug_name(sc_render_debug d)
+{
+    return (unsigned)d < SC_RENDER_DEBUG_COUNT ? debug_names[d] : "?";
+}
+
+sc_status sc_render_debug_from_name(const char *name, sc_render_debug *out)
+{
+    if (!name || !out)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < SC_RENDER_DEBUG_COUNT; i++)
+        if (strcmp(name, debug_names[i]) == 0) {
+            *out = (sc_render_debug)i;
+            return SC_OK;
+        }
+    return SC_ERR_INVALID_ARGUMENT;
+}
+
+void sc_render_options_init(sc_render_options *o)
+{
+    if (!o)
+        return;
+    memset(o, 0, sizeof *o);
+    o->seed = 1;
+    o->shadows = 1;
+}
+
+typedef struct ctx {
+    const sc_scene_view *v;
+    const sc_bvh *bvh;
+    const sc_render_options *o;
+    sc_camera_frame frame;
+    double eps;           /* offset of secondary ray origins along the normal */
+    double ao_len;
+    float *accum;         /* 3 per pixel, linear */
+    float *value;         /* depth or heat per pixel */
+    int collect;
+} ctx;
+
+static void add_stats(sc_trace_stats *a, const sc_trace_stats *b)
+{
+    a->rays += b->rays;
+    a->nodes += b->nodes;
+    a->leaves += b->leaves;
+    a->sphere_tests += b->sphere_tests;
+    a->sphere_rejects += b->sphere_rejects;
+    a->tri_tests += b->tri_tests;
+    a->tri_hits += b->tri_hits;
+}
+
+static int occluded(const ctx *c, const double o[3], const double d[3], float tmax,
+                    sc_trace_stats *ts)
+{
+    sc_ray r = { { (float)o[0], (float)o[1], (float)o[2] }, 0.0f,
+                 { (float)d[0], (float)d[1], (float)d[2] }, tmax };
+    int blocked = 0;
+    if (sc_trace_any(c->bvh, &r, &blocked, c->collect ? ts : NULL) != SC_OK)
+        return 0;   /* a degenerate shadow ray (zero direction) lights the point */
+    return blocked;
+}
+
+static void shade_pixel(const ctx *c, int px, int py, float rgb[3], float *value,
+                        sc_render_stats *st)
+{
+    const sc_scene_view *v = c->v;
+    const sc_camera *cam = &v->camera;
+    double dir[3];
+    sc_camera_ray_dir(cam, &c->frame, px + 0.5, py + 0.5, dir);
+    sc_ray ray = { { (float)cam->eye[0], (float)cam->eye[1], (float)cam->eye[2] }, 0.0f,
+                   { (float)dir[0], (float)dir[1], (float)dir[2] }, INFINITY };
+    sc_hitrec hit;
+    sc_trace_stats before = st->trace;
+    st->primary_rays++;
+    sc_status s = sc_trace_closest(c->bvh, &ray, &hit, c->collect ? &st->trace : NULL);
+    if (c->o->debug == SC_RENDER_HEAT) {
+        /* Sphere tests; a BVH without spheres shows its triangle tests. */
+        uint64_t n = st->trace.sphere_tests - before.sphere_tests;
+        *value = (float)(n ? n : st->trace.tri_tests - before.tri_tests);
+        return;
+    }
+    if (s != SC_OK || hit.prim == SC_HITREC_MISS || hit.prim >= v->num_triangles) {
+        for (int i = 0; i < 3; i++)
+            rgb[i] = c->o->debug == SC_RENDER_SHADED ? v->background[i] : 0.0f;
+        return;
+    }
+    const uint32_t *ix = v->indices + 3 * (size_t)hit.prim;
+    const float *a = v->positions + 3 * (size_t)ix[0], *b = v->positions + 3 * (size_t)ix[1],
+                *cc = v->positions + 3 * (size_t)ix[2];
+    double e0[3], e1[3], n[3], p[3];
+    for (int i = 0; i < 3; i++) {
+        e0[i] = (double)b[i] - a[i];
+        e1[i] = (double)cc[i] - a[i];
+        p[i] = (double)ray.org[i] + (double)hit.t * (double)ray.dir[i];
+    }
+    n[0] = e0[1] * e1[2] - e0[2] * e1[1];
+    n[1] = e0[2] * e1[0] - e0[0] * e1[2];
+    n[2] = e0[0] * e1[1] - e0[1] * e1[0];
+    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(nl > 0)) {   /* degenerate triangle: face the viewer */
+        for (int i = 0; i < 3; i++)
+            n[i] = -dir[i];
+        nl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    }
+    for (int i = 0; i < 3; i++)
+        n[i] /= nl;
+    if (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2] > 0)
+        for (int i = 0; i < 3; i++)
+            n[i] = -n[i];
+    if (c->o->debug == SC_RENDER_NORMALS) {
+        for (int i = 0; i < 3; i++)
+            rgb[i] = (float)(0.5 * n[i] + 0.5);
+        return;
+    }
+    if (c->o->debug == SC_RENDER_DEPTH) {
+        *value = (float)(hit.t * sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]));
+        return;
+    }
+    if (c->o->debug == SC_RENDER_ID) {
+        uint64_t h = hit.prim + 1;
+        uint64_t z = sc_rng_splitmix(&h);
+        for (int i = 0; i < 3; i++)
+            rgb[i] = (float)(0.2 + 0.8 * (double)((z >> (16 * i)) & 0xffff) / 65535.0);
+        return;
+    }
+
+    double o[3];
+    for (int i = 0; i < 3; i++)
+        o[i] = p[i] + c->eps * n[i];
+    const float *albedo = v->mesh_colors + 3 * (size_t)v->mesh_ids[hit.prim];
+    double light[3] = { 0, 0, 0 };
+    for (size_t l = 0; l < v->num_lights; l++) {
+        const sc_light *L = &v->lights[l];
+        double to[3], dist2 = 1, tmax_scale;
+        if (L->type == SC_LIGHT_DIRECTIONAL) {
+            for (int i = 0; i < 3; i++)
+                to[i] = -(double)L->vec[i];
+            tmax_scale = INFINITY;
+        } else {
+            for (int i = 0; i < 3; i++)
+                to[i] = (double)L->vec[i] - o[i];
+            dist2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
+            if (!(dist2 > 0))
+                continue;
+            tmax_scale = 1.0;   /* unnormalised direction: t = 1 at the light */
+        }
+        double len = sqrt(to[0] * to[0] + to[1] * to[1] + to[2] * to[2]);
+        double cosine = (n[0] * to[0] + n[1] * to[1] + n[2] * to[2]) / len;
+        if (!(cosine > 0))
+            continue;
+        if (c->o->shadows) {
+            st->shadow_rays++;
+            float tmax = isinf(tmax_scale) ? INFINITY : (float)(1.0 - 1e-6);
+            if (occluded(c, o, to, tmax, &st->trace))
+                continue;
+        }
+        double k = cosine / (L->type == SC_LIGHT_POINT ? dist2 : 1.0);
+        for (int i = 0; i < 3; i++)
+            light[i] += k * L->color[i];
+    }
+    double ambient = v->ambient;
+    if (c->o->ao_samples > 0) {
+        sc_rng r;
+        sc_rng_seed(&r, c->o->seed ^ ((uint64_t)py * 0x9e3779b97f4a7c15ull + (uint64_t)px));
+        double t1[3], t2[3];
+        double ax = fabs(n[0]) < 0.9 ? 1 : 0, ay = 1 - ax;
+        t1[0] = ay * n[2];   /* (ax, ay, 0) x n */
+        t1[1] = -ax * n[2];
+        t1[2] = ax * n[1] - ay * n[0];
+        double tl = sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+        for (int i = 0; i < 3; i++)
+            t1[i] /= tl;
+        t2[0] = n[1] * t1[2] - n[2] * t1[1];
+        t2[1] = n[2] * t1[0] - n[0] * t1[2];
+        t2[2] = n[0] * t1[1] - n[1] * t1[0];
+        int open = 0;
+        for (int s2 = 0; s2 < c->o->ao_samples; s2++) {
+            /* Cosine-weighted: the unoccluded fraction is the ambient
+             * visibility seen by a Lambert surface. */
+            double u1 = sc_rng_uniform(&r), u2 = sc_rng_uniform(&r);
+            double rr = sqrt(u1), ph = 2 * PI * u2, z = sqrt(1 - u1);
+            double d[3];
+            for (int i = 0; i < 3; i++)
+                d[i] = c->ao_len * (rr * cos(ph) * t1[i] + rr * sin(ph) * t2[i] + z * n[i]);
+            st->ao_rays++;
+            open += !occluded(c, o, d, 1.0f, &st->trace);
+        }
+        ambient *= (double)open / c->o->ao_samples;
+    }
+    for (int i = 0; i < 3; i++)
+        rgb[i] = (float)(albedo[i] * (ambient + light[i]));
+}
+
+static uint8_t encode(float linear)
+{
+    if (!(linear > 0))
+        return 0;
+    if (linear >= 1)
+        return 255;
+    return (uint8_t)lrint(255.0 * pow(linear, 1 / 2.2));
+}
+
+/* Blue - cyan - green - yellow - red. */
+static void heat_color(double x, uint8_t out[3])
+{
+    static const double stops[5][3] = { { 0, 0, 0.5 }, { 0, 0.8, 1 }, { 0.2, 0.9, 0.2 },
+                                        { 1, 0.9, 0 }, { 0.9, 0.1, 0 } };
+    x = x < 0 ? 0 : x > 1 ? 1 : x;
+    double f = x * 4;
+    int i = f >= 4 ? 3 : (int)f;
+    double t = f - i;
+    for (int k = 0; k < 3; k++)
+        out[k] = (uint8_t)lrint(255 * (stops[i][k] * (1 - t) + stops[i + 1][k] * t));
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_options *opt,
+                    sc_image *out, sc_render_stats *stats)
+{
+    if (!v || !bvh || !out || (v->num_triangles && (!v->positions || !v->indices || !v->mesh_ids)) ||
+        (v->num_meshes && !v->mesh_colors) || (v->num_lights && !v->lights))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_render_options defaults;
+    if (!opt) {
+        sc_render_options_init(&defaults);
+        opt = &defaults;
+    }
+    if ((unsigned)opt->debug >= SC_RENDER_DEBUG_COUNT || opt->ao_samples < 0 ||
+        opt->ao_samples > 4096 || opt->threads < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    ctx c = { .v = v, .bvh = bvh, .o = opt };
+    if (sc_camera_frame_make(&v->camera, &c.frame) != SC_OK)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (size_t t = 0; t < v->num_triangles; t++)
+        if (v->mesh_ids[t] >= v->num_meshes)
+            return SC_ERR_INVALID_ARGUMENT;
+    const int w = v->camera.width, h = v->camera.height;
+    sc_status st = sc_image_alloc(out, w, h);
+    if (st != SC_OK)
+        return st;
+
+    /* Offsets scale with the scene: 1e-4 of the diagonal, as the shared ray
+     * sets do (sc_rays.h), and never below float resolution at the hit. */
+    double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (size_t k = 0; k < 3 * v->num_triangles; k++) {
+        const float *p = v->positions + 3 * (size_t)v->indices[k];
+        for (int i = 0; i < 3; i++) {
+            lo[i] = fmin(lo[i], p[i]);
+            hi[i] = fmax(hi[i], p[i]);
+        }
+    }
+    double diag = 0, mag = 0;
+    for (int i = 0; i < 3; i++) {
+        if (lo[i] <= hi[i]) {
+            diag += (hi[i] - lo[i]) * (hi[i] - lo[i]);
+            mag = fmax(mag, fmax(fabs(lo[i]), fabs(hi[i])));
+        }
+    }
+    diag = sqrt(diag);
+    c.eps = fmax(1e-4 * diag, 4e-7 * mag);
+    if (!(c.eps > 0))
+        c.eps = 1e-6;
+    c.ao_len = 0.2 * diag;
+    c.collect = opt->trace_stats || opt->debug == SC_RENDER_HEAT;
+
+    size_t npx = (size_t)w * (size_t)h;
+    c.accum = malloc(npx * 3 * sizeof(float));
+    c.value = malloc(npx * sizeof(float));
+    if (!c.accum || !c.value) {
+        free(c.accum);
+        free(c.value);
+        sc_image_free(out);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    const int tx = (w + TILE - 1) / TILE, ty = (h + TILE - 1) / TILE, ntiles = tx * ty;
+    sc_render_stats total;
+    memset(&total, 0, sizeof total);
+    int done = 0;
+    double t0 = now_seconds();
+#ifdef _OPENMP
+    int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
+#pragma omp parallel num_threads(nthreads)
+#endif
+    {
+        sc_render_stats local;
+        memset(&local, 0, sizeof local);
+#ifdef _OPENMP
+#pragma omp for schedule(dynamic, 1)
+#endif
+        for (int tile = 0; tile < ntiles; tile++) {
+            int x0 = (tile % tx) * TILE, y0 = (tile / tx) * TILE;
+            for (int y = y0; y < y0 + TILE && y < h; y++)
+                for (int x = x0; x < x0 + TILE && x < w; x++) {
+                    size_t i = (size_t)y * (size_t)w + (size_t)x;
+                    c.value[i] = -1;
+                    shade_pixel(&c, x, y, c.accum + 3 * i, c.value + i, &local);
+                }
+            int d;
+#ifdef _OPENMP
+#pragma omp atomic capture
+#endif
+            d = ++done;
+#ifdef _OPENMP
+            if (omp_get_thread_num() == 0 && opt->progress)
+#else
+            if (opt->progress)
+#endif
+                opt->progress(opt->progress_ctx, (double)d / ntiles);
+        }
+#ifdef _OPENMP
+#pragma omp critical(sc_render_stats)
+#endif
+        {
+            total.primary_rays += local.primary_rays;
+            total.shadow_rays += local.shadow_rays;
+            total.ao_rays += local.ao_rays;
+            add_stats(&total.trace, &local.trace);
+        }
+    }
+    total.seconds = now_seconds() - t0;
+
+    if (opt->debug == SC_RENDER_DEPTH || opt->debug == SC_RENDER_HEAT) {
+        double vmin = INFINITY, vmax = -INFINITY;
+        for (size_t i = 0; i < npx; i++)
+            if (c.value[i] >= 0) {
+                vmin = fmin(vmin, c.value[i]);
+                vmax = fmax(vmax, c.value[i]);
+            }
+        for (size_t i = 0; i < npx; i++) {
+            uint8_t *px = out->rgb + 3 * i;
+            if (opt->debug == SC_RENDER_HEAT) {
+                heat_color(vmax > 0 ? c.value[i] / vmax : 0, px);
+            } else if (c.value[i] >= 0) {
+                double x = vmax > vmin ? (c.value[i] - vmin) / (vmax - vmin) : 0;
+                px[0] = px[1] = px[2] = (uint8_t)lrint(255 * (1 - 0.85 * x));
+            }
+        }
+    } else {
+        int gamma = opt->debug == SC_RENDER_SHADED;
+        for (size_t i = 0; i < 3 * npx; i++)
+            out->rgb[i] = gamma ? encode(c.accum[i])
+                                : (uint8_t)lrint(255 * fmin(1, fmax(0, c.accum[i])));
+    }
+    free(c.accum);
+    free(c.value);
+    if (stats)
+        *stats = total;
+    return SC_OK;
+}

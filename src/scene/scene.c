@@ -1,0 +1,617 @@
+/* The scene container: flat arrays, caps, warnings, camera framing. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include "scene_internal.h"
+
+void sc_scene_options_init(sc_scene_options *o)
+{
+    if (!o)
+        return;
+    memset(o, 0, sizeof *o);
+    o->seed = 1;
+}
+
+sc_status sc_scene_errf(char *err, size_t errlen, sc_status st, const char *fmt, ...)
+{
+    if (err && errlen > 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+        /* One line: a loader message (assimp's, say) may carry newlines. */
+        for (char *p = err; *p; p++)
+            if (*p == '\n' || *p == '\r')
+                *p = ' ';
+        size_t n = strlen(err);
+        while (n > 0 && err[n - 1] == ' ')
+            err[--n] = '\0';
+    }
+    return st;
+}
+
+void sc_scene_warnf(sc_scene *s, const char *fmt, ...)
+{
+    s->warnings++;
+    if (!s->warn || s->warnings > SC_SCENE_MAX_WARNINGS)
+        return;
+    char buf[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    for (char *p = buf; *p; p++)
+        if (*p == '\n' || *p == '\r')
+            *p = ' ';
+    size_t n = strlen(buf);
+    while (n > 0 && buf[n - 1] == ' ')
+        buf[--n] = '\0';
+    s->warn(s->warn_ctx, buf);
+}
+
+static void default_camera(sc_camera *c)
+{
+    memset(c, 0, sizeof *c);
+    c->eye[2] = 5;
+    c->up[1] = 1;
+    c->fov_y_deg = 40;
+    c->width = SC_SCENE_DEFAULT_WIDTH;
+    c->height = SC_SCENE_DEFAULT_HEIGHT;
+}
+
+sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    sc_scene_options defaults;
+    if (!options) {
+        sc_scene_options_init(&defaults);
+        options = &defaults;
+    }
+    sc_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return SC_ERR_OUT_OF_MEMORY;
+    s->max_triangles = options->max_triangles ? options->max_triangles : SC_SCENE_DEFAULT_MAX_TRIANGLES;
+    s->max_pixels = options->max_pixels ? options->max_pixels : SC_SCENE_DEFAULT_MAX_PIXELS;
+    s->seed = options->seed;
+    s->warn = options->warn;
+    s->warn_ctx = options->warn_ctx;
+    if (options->mesh_cache_dir) {
+        s->cache_dir = strdup(options->mesh_cache_dir);
+        if (!s->cache_dir) {
+            free(s);
+            return SC_ERR_OUT_OF_MEMORY;
+        }
+    }
+    default_camera(&s->camera);
+    s->background[0] = 0.05f;
+    s->background[1] = 0.06f;
+    s->background[2] = 0.08f;
+    s->ambient = 0.15f;
+    *out = s;
+    return SC_OK;
+}
+
+void sc_scene_free(sc_scene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->indices);
+    free(s->mesh_ids);
+    free(s->mesh_colors);
+    free(s->lights);
+    free(s->cache_dir);
+    free(s);
+}
+
+/* Grows *p to hold at least need elements of size elem, doubling. */
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 1;
+    /* Doubling for many small appends, exact for one big mesh (no 2x
+     * overshoot on a 50M-triangle model). */
+    size_t c = *cap <= SIZE_MAX / 2 ? 2 * *cap : SIZE_MAX;
+    if (c < need)
+        c = need;
+    if (c < 16)
+        c = 16;
+    if (c > SIZE_MAX / elem)
+        return 0;
+    void *q = realloc(*p, c * elem);
+    if (!q)
+        return 0;
+    *p = q;
+    *cap = c;
+    return 1;
+}
+
+sc_status sc_scene_reserve(sc_scene *s, size_t more_v, size_t more_t, char *err, size_t errlen)
+{
+    uint64_t max_v = s->max_triangles > UINT32_MAX / 3 ? UINT32_MAX : 3 * s->max_triangles;
+    if (more_t > s->max_triangles || s->num_triangles > s->max_triangles - more_t)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT,
+                             "scene would have %llu triangles, more than the cap of %llu",
+                             (unsigned long long)s->num_triangles + (unsigned long long)more_t,
+                             (unsigned long long)s->max_triangles);
+    if (more_v > max_v || s->num_vertices > max_v - more_v)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT,
+                             "scene would have %llu vertices, more than the cap of %llu",
+                             (unsigned long long)s->num_vertices + (unsigned long long)more_v,
+                             (unsigned long long)max_v);
+    size_t nv = s->num_vertices + more_v, nt = s->num_triangles + more_t;
+    /* grow() changes an array only on success, so a failure leaves a
+     * consistent (if larger) scene behind. */
+    if (!grow((void **)&s->positions, &s->cap_vertices, nv, 3 * sizeof(float)) ||
+        !grow((void **)&s->indices, &s->cap_triangles, nt, 3 * sizeof(uint32_t)) ||
+        !grow((void **)&s->mesh_ids, &s->cap_mesh_ids, nt, sizeof(uint32_t)))
+        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY,
+                             "out of memory for %zu triangles", nt);
+    return SC_OK;
+}
+
+static float clamp01(float v, float fallback)
+{
+    if (!(v == v))
+        return fallback;
+    return v < 0 ? 0 : v > 1 ? 1 : v;
+}
+
+sc_status sc_scene_new_mesh(sc_scene *s, const float color[3], uint32_t *id)
+{
+    if (s->num_meshes >= UINT32_MAX)
+        return SC_ERR_LIMIT;
+    if (!grow((void **)&s->mesh_colors, &s->cap_meshes, s->num_meshes + 1, 3 * sizeof(float)))
+        return SC_ERR_OUT_OF_MEMORY;
+    float *c = s->mesh_colors + 3 * s->num_meshes;
+    for (int i = 0; i < 3; i++)
+        c[i] = color ? clamp01(color[i], SC_DEFAULT_GREY) : SC_DEFAULT_GREY;
+    *id = (uint32_t)s->num_meshes++;
+    return SC_OK;
+}
+
+static int is_degenerate(const float *a, const float *b, const float *c)
+{
+    /* Double holds the float products exactly enough that "zero" here means
+     * collinear or coincident vertices, not an underflow. */
+    double e0[3], e1[3];
+    for (int i = 0; i < 3; i++) {
+        e0[i] = (double)b[i] - a[i];
+        e1[i] = (double)c[i] - a[i];
+    }
+    double nx = e0[1] * e1[2] - e0[2] * e1[1];
+    double ny = e0[2] * e1[0] - e0[0] * e1[2];
+    double nz = e0[0] * e1[1] - e0[1] * e1[0];
+    return nx == 0 && ny == 0 && nz == 0;
+}
+
+static int vertex_finite(const float *p)
+{
+    return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+}
+
+sc_status sc_scene_append_triangles(sc_scene *s, const float *positions, size_t nv,
+                                   const uint32_t *indices, size_t nt, uint32_t mesh,
+                                   char *err, size_t errlen)
+{
+    if (!s || (nv > 0 && !positions) || (nt > 0 && !indices) || mesh >= s->num_meshes)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL scene or buffer");
+    if (nt > 0 && nv == 0)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "triangles without vertices");
+    if (nt > SIZE_MAX / 3)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT, "too many triangles");
+    for (size_t i = 0; i < 3 * nt; i++)
+        if (indices[i] >= nv)
+            return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT,
+                                 "triangle %zu: vertex index %lu out of range (%zu vertices)",
+                                 i / 3, (unsigned long)indices[i], nv);
+
+    size_t bad_vertices = 0;
+    for (size_t v = 0; v < nv; v++)
+        bad_vertices += !vertex_finite(positions + 3 * v);
+    size_t kept = nt;
+    if (bad_vertices) {
+        kept = 0;
+        for (size_t t = 0; t < nt; t++) {
+            const uint32_t *ix = indices + 3 * t;
+            kept += vertex_finite(positions + 3 * (size_t)ix[0]) &&
+                    vertex_finite(positions + 3 * (size_t)ix[1]) &&
+                    vertex_finite(positions + 3 * (size_t)ix[2]);
+        }
+    }
+
+    sc_status st = sc_scene_reserve(s, nv, kept, err, errlen);
+    if (st != SC_OK)
+        return st;
+
+    uint32_t base = (uint32_t)s->num_vertices;
+    float *dst = s->positions + 3 * s->num_vertices;
+    for (size_t v = 0; v < nv; v++) {
+        const float *p = positions + 3 * v;
+        int ok = vertex_finite(p);
+        for (int i = 0; i < 3; i++)
+            dst[3 * v + i] = ok ? p[i] : 0.0f;
+    }
+    size_t degenerate = 0, out = s->num_triangles;
+    for (size_t t = 0; t < nt; t++) {
+        const uint32_t *ix = indices + 3 * t;
+        const float *a = positions + 3 * (size_t)ix[0], *b = positions + 3 * (size_t)ix[1],
+                    *c = positions + 3 * (size_t)ix[2];
+        if (bad_vertices && !(vertex_finite(a) && vertex_finite(b) && vertex_finite(c)))
+            continue;
+        degenerate += is_degenerate(a, b, c);
+        for (int k = 0; k < 3; k++)
+            s->indices[3 * out + k] = base + ix[k];
+        s->mesh_ids[out] = mesh;
+        out++;
+    }
+    s->num_vertices += nv;
+    s->num_triangles = out;
+    s->degenerate += degenerate;
+    if (kept < nt) {
+        s->dropped_nonfinite += nt - kept;
+        sc_scene_warnf(s, "mesh %lu: dropped %zu triangles with NaN or infinite vertex coordinates",
+                       (unsigned long)mesh, nt - kept);
+    }
+    return SC_OK;
+}
+
+sc_status sc_scene_add_mesh(sc_scene *s, const float *positions, size_t nv,
+                            const uint32_t *indices, size_t nt, const float color[3],
+                            char *err, size_t errlen)
+{
+    if (!s)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL scene");
+    uint32_t mesh;
+    sc_status st = sc_scene_new_mesh(s, color, &mesh);
+    if (st != SC_OK)
+        return sc_scene_errf(err, errlen, st, "cannot add another mesh: %s", sc_strerror(st));
+    st = sc_scene_append_triangles(s, positions, nv, indices, nt, mesh, err, errlen);
+    if (st != SC_OK)
+        s->num_meshes--;   /* nothing refers to it yet */
+    return st;
+}
+
+sc_status sc_scene_add_light(sc_scene *s, const sc_light *l)
+{
+    if (!s || !l || (l->type != SC_LIGHT_DIRECTIONAL && l->type != SC_LIGHT_POINT))
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(l->vec[i]) || !isfinite(l->color[i]) || l->color[i] < 0)
+            return SC_ERR_INVALID_ARGUMENT;
+    sc_light copy = *l;
+    if (l->type == SC_LIGHT_DIRECTIONAL) {
+        double n = sqrt((double)l->vec[0] * l->vec[0] + (double)l->vec[1] * l->vec[1] +
+                        (double)l->vec[2] * l->vec[2]);
+        if (!(n > 0) || !isfinite(n))
+            return SC_ERR_INVALID_ARGUMENT;
+        for (int i = 0; i < 3; i++)
+            copy.vec[i] = (float)(l->vec[i] / n);
+    }
+    if (!grow((void **)&s->lights, &s->cap_lights, s->num_lights + 1, sizeof(sc_light)))
+        return SC_ERR_OUT_OF_MEMORY;
+    s->lights[s->num_lights++] = copy;
+    return SC_OK;
+}
+
+sc_status sc_scene_set_camera(sc_scene *s, const sc_camera *c)
+{
+    sc_camera_frame f;
+    if (!s || !c || sc_camera_frame_make(c, &f) != SC_OK)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (c->width > SC_SCENE_MAX_IMAGE_SIDE || c->height > SC_SCENE_MAX_IMAGE_SIDE ||
+        (uint64_t)c->width * (uint64_t)c->height > s->max_pixels)
+        return SC_ERR_LIMIT;
+    s->camera = *c;
+    return SC_OK;
+}
+
+sc_status sc_scene_set_background(sc_scene *s, const float rgb[3])
+{
+    if (!s || !rgb)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < 3; i++)
+        if (!isfinite(rgb[i]))
+            return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < 3; i++)
+        s->background[i] = clamp01(rgb[i], 0);
+    return SC_OK;
+}
+
+void sc_scene_bounds(const sc_scene *s, size_t first, double lo[3], double hi[3])
+{
+    for (int i = 0; i < 3; i++) {
+        lo[i] = INFINITY;
+        hi[i] = -INFINITY;
+    }
+    for (size_t k = 3 * first; k < 3 * s->num_triangles; k++) {
+        const float *p = s->positions + 3 * (size_t)s->indices[k];
+        for (int i = 0; i < 3; i++) {
+            if (p[i] < lo[i])
+                lo[i] = p[i];
+            if (p[i] > hi[i])
+                hi[i] = p[i];
+        }
+    }
+    if (!(lo[0] <= hi[0]))
+        for (int i = 0; i < 3; i++) {
+            lo[i] = -1;
+            hi[i] = 1;
+        }
+}
+
+sc_status sc_scene_frame_camera(sc_scene *s, double az, double el, double fov, int w, int h)
+{
+    if (!s || !isfinite(az) || !isfinite(el) || !(fov > 0 && fov < 180) || w < 1 || h < 1)
+        return SC_ERR_INVALID_ARGUMENT;
+    double lo[3], hi[3], c[3], r2 = 0;
+    sc_scene_bounds(s, 0, lo, hi);
+    for (int i = 0; i < 3; i++) {
+        c[i] = 0.5 * lo[i] + 0.5 * hi[i];
+        double e = 0.5 * hi[i] - 0.5 * lo[i];
+        r2 += e * e;
+    }
+    double r = sqrt(r2);
+    if (!(r > 0) || !isfinite(r))
+        r = 1;
+    /* Straight up or down leaves no horizon to derive "right" from. */
+    if (el > 89)
+        el = 89;
+    if (el < -89)
+        el = -89;
+    const double d2r = 3.14159265358979323846 / 180;
+    double half_y = 0.5 * fov * d2r;
+    double half_x = atan(tan(half_y) * w / h);
+    double half = half_x < half_y ? half_x : half_y;
+    double dist = 1.05 * r / sin(half);
+    sc_camera cam;
+    default_camera(&cam);
+    cam.eye[0] = c[0] + dist * cos(el * d2r) * sin(az * d2r);
+    cam.eye[1] = c[1] + dist * sin(el * d2r);
+    cam.eye[2] = c[2] + dist * cos(el * d2r) * cos(az * d2r);
+    memcpy(cam.target, c, sizeof c);
+    cam.fov_y_deg = fov;
+    cam.width = w;
+    cam.height = h;
+    return sc_scene_set_camera(s, &cam);
+}
+
+sc_status sc_scene_add_default_light(sc_scene *s)
+{
+    if (!s)
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_camera_frame f;
+    if (sc_camera_frame_make(&s->camera, &f) != SC_OK)
+        return SC_ERR_INVALID_ARGUMENT;
+    /* From above, a little left of and behind the viewer: shadows fall
+     * visibly to the lower right without hiding the model. */
+    sc_light l = { .type = SC_LIGHT_DIRECTIONAL, .color = { 0.9f, 0.9f, 0.9f } };
+    for (int i = 0; i < 3; i++)
+        l.vec[i] = (float)-(-0.45 * f.right[i] + 1.0 * f.up[i] - 0.6 * f.forward[i]);
+    return sc_scene_add_light(s, &l);
+}
+
+sc_status sc_scene_get_view(const sc_scene *s, sc_scene_view *v)
+{
+    if (!s || !v)
+        return SC_ERR_INVALID_ARGUMENT;
+    v->positions = s->positions;
+    v->indices = s->indices;
+    v->mesh_ids = s->mesh_ids;
+    v->mesh_colors = s->mesh_colors;
+    v->lights = s->lights;
+    v->num_vertices = s->num_vertices;
+    v->num_triangles = s->num_triangles;
+    v->num_meshes = s->num_meshes;
+    v->num_lights = s->num_lights;
+    v->camera = s->camera;
+    memcpy(v->background, s->background, sizeof v->background);
+    v->ambient = s->ambient;
+    return SC_OK;
+}
+
+sc_status sc_scene_get_stats(const sc_scene *s, sc_scene_stats *st)
+{
+    if (!s || !st)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(st, 0, sizeof *st);
+    st->triangles = s->num_triangles;
+    st->vertices = s->num_vertices;
+    st->meshes = s->num_meshes;
+    st->degenerate_triangles = s->degenerate;
+    st->dropped_nonfinite = s->dropped_nonfinite;
+    st->skipped_primitives = s->skipped_primitives;
+    st->warnings = s->warnings;
+    st->bytes = s->num_vertices * 3 * sizeof(float) +
+                s->num_triangles * (3 * sizeof(uint32_t) + sizeof(uint32_t));
+    st->bytes_per_triangle = s->num_triangles ? (double)st->bytes / (double)s->num_triangles : 0;
+    sc_scene_bounds(s, 0, st->bounds_min, st->bounds_max);
+    return SC_OK;
+}
+
+sc_status sc_scene_mesh_cache_dir(const sc_scene_options *o, char *buf, size_t len)
+{
+    if (!buf || len == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const char *dir = o ? o->mesh_cache_dir : NULL;
+    const char *env;
+    int n;
+    if (dir && *dir)
+        n = snprintf(buf, len, "%s", dir);
+    else if ((env = getenv("SPHERECULL_MESHES")) && *env)
+        n = snprintf(buf, len, "%s", env);
+    else if ((env = getenv("XDG_CACHE_HOME")) && *env)
+        n = snprintf(buf, len, "%s/spherecull/meshes", env);
+    else if ((env = getenv("HOME")) && *env)
+        n = snprintf(buf, len, "%s/.cache/spherecull/meshes", env);
+    else
+        return SC_ERR_IO;
+    return n >= 0 && (size_t)n < len ? SC_OK : SC_ERR_RANGE;
+}
+
+int sc_scene_parse_count(const char *text, uint64_t *out)
+{
+    if (!text || *text < '0' || *text > '9')
+        return 0;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(text, &end, 10);
+    if (errno)
+        return 0;
+    uint64_t mul = 1;
+    if (*end == 'k' || *end == 'K')
+        mul = 1000, end++;
+    else if (*end == 'M')
+        mul = 1000000, end++;
+    if (*end != '\0' || v == 0 || v > UINT64_MAX / mul)
+        return 0;
+    *out = v * mul;
+    return 1;
+}
+
+static int has_suffix_ci(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcasecmp(s + n - m, suffix) == 0;
+}
+
+static char *str_replace_all(const char *s, const char *what, const char *with)
+{
+    size_t lw = strlen(what), lr = strlen(with), count = 0;
+    for (const char *p = strstr(s, what); p; p = strstr(p + lw, what))
+        count++;
+    size_t len = strlen(s) + count * lr + 1;
+    char *out = malloc(len);
+    if (!out)
+        return NULL;
+    char *o = out;
+    const char *p = s, *q;
+    while ((q = strstr(p, what))) {
+        memcpy(o, p, (size_t)(q - p));
+        o += q - p;
+        memcpy(o, with, lr);
+        o += lr;
+        p = q + lw;
+    }
+    strcpy(o, p);
+    return out;
+}
+
+sc_status sc_scene_expand_path(sc_scene *s, const char *spec, const char *base_dir,
+                               char **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    int is_cache = strncmp(spec, "cache:", 6) == 0;
+    char cache[4096];
+    if (is_cache || strstr(spec, "${SPHERECULL_MESHES}")) {
+        sc_scene_options o;
+        sc_scene_options_init(&o);
+        o.mesh_cache_dir = s->cache_dir;
+        sc_status st = sc_scene_mesh_cache_dir(&o, cache, sizeof cache);
+        if (st != SC_OK)
+            return sc_scene_errf(err, errlen, SC_ERR_IO,
+                                 "%s: cannot locate the mesh cache (set SPHERECULL_MESHES or HOME)", spec);
+    }
+    char *p;
+    if (is_cache) {
+        const char *name = spec + 6;
+        if (!*name)
+            return sc_scene_errf(err, errlen, SC_ERR_PARSE, "'cache:' needs a file name");
+        size_t len = strlen(cache) + strlen(name) + 2;
+        p = malloc(len);
+        if (p)
+            snprintf(p, len, "%s/%s", cache, name);
+    } else if (strstr(spec, "${SPHERECULL_MESHES}")) {
+        p = str_replace_all(spec, "${SPHERECULL_MESHES}", cache);
+    } else if (spec[0] != '/' && base_dir && *base_dir) {
+        size_t len = strlen(base_dir) + strlen(spec) + 2;
+        p = malloc(len);
+        if (p)
+            snprintf(p, len, "%s/%s", base_dir, spec);
+    } else {
+        p = strdup(spec);
+    }
+    if (!p)
+        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "out of memory");
+    *out = p;
+    return SC_OK;
+}
+
+sc_status sc_scene_append_spec(sc_scene *s, const char *spec, const double xform[16],
+                               const float *color, char *err, size_t errlen)
+{
+    if (strncmp(spec, "proc:", 5) == 0)
+        return sc_scene_load_procedural(s, spec, xform, color, err, errlen);
+    char *path;
+    sc_status st = sc_scene_expand_path(s, spec, NULL, &path, err, errlen);
+    if (st != SC_OK)
+        return st;
+    if (has_suffix_ci(path, ".json")) {
+        free(path);
+        return sc_scene_errf(err, errlen, SC_ERR_PARSE,
+                             "%s: a scene file cannot be used as a mesh", spec);
+    }
+    struct stat sb;
+    if (strncmp(spec, "cache:", 6) == 0 && stat(path, &sb) != 0) {
+        st = sc_scene_errf(err, errlen, SC_ERR_IO,
+                           "%s: %s not found (run scripts/fetch-meshes.sh to fill the mesh cache)",
+                           spec, path);
+        free(path);
+        return st;
+    }
+    st = sc_scene_load_assimp(s, path, xform, color, err, errlen);
+    free(path);
+    return st;
+}
+
+sc_status sc_scene_load(const char *spec, const sc_scene_options *options, sc_scene **out,
+                        char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!out)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
+    *out = NULL;
+    if (!spec || !*spec)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "empty scene name");
+    sc_scene *s;
+    sc_status st = sc_scene_create(options, &s);
+    if (st != SC_OK)
+        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
+
+    int json = strncmp(spec, "proc:", 5) != 0 && strncmp(spec, "cache:", 6) != 0 &&
+               has_suffix_ci(spec, ".json");
+    if (json)
+        st = sc_scene_load_json(s, spec, err, errlen);
+    else
+        st = sc_scene_append_spec(s, spec, NULL, NULL, err, errlen);
+    if (st == SC_OK && s->num_triangles == 0)
+        st = sc_scene_errf(err, errlen, SC_ERR_PARSE, "%s: no triangles to render", spec);
+    if (st == SC_OK && !json) {
+        st = sc_scene_frame_camera(s, 35, 25, 40, SC_SCENE_DEFAULT_WIDTH, SC_SCENE_DEFAULT_HEIGHT);
+        if (st == SC_OK)
+            st = sc_scene_add_default_light(s);
+        if (st != SC_OK)
+            st = sc_scene_errf(err, errlen, st, "%s: cannot frame the camera on the model", spec);
+    }
+    if (st != SC_OK) {
+        sc_scene_free(s);
+        return st;
+    }
+    if (s->warnings > SC_SCENE_MAX_WARNINGS && s->warn) {
+        char buf[96];
+        snprintf(buf, sizeof buf, "%zu more warnings not shown",
+                 s->warnings - SC_SCENE_MAX_WARNINGS);
+        s->warn(s->warn_ctx, buf);
+    }
+    *out = s;
+    return SC_OK;
+}

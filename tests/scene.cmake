@@ -1,0 +1,13 @@
+# Scenes (issue 4) and bad input (issue 7): loaders, procedural scenes, PNG.
+if(TARGET spherecull_scene)
+  foreach(t test_scene test_scene_bad)
+    sc_add_test(${t} SOURCES ${t}.c LIBS spherecull_scene)
+    target_compile_definitions(${t} PRIVATE SC_TEST_DATA="${CMAKE_CURRENT_SOURCE_DIR}/data")
+  endforeach()
+endif()
+if(TARGET spherecull_render)
+  sc_add_test(test_png SOURCES test_png.c LIBS spherecull_render)
+endif()
+if(TARGET spherecull_render AND TARGET spherecull_scene)
+  sc_add_test(test_render SOURCES test_render.c LIBS spherecull_render spherecull_scene)
+endif()
