@@ -14,6 +14,9 @@ typedef struct sc_command {
 
 int sc_cmd_accuracy(int argc, char **argv);
 int sc_cmd_bench_spheres(int argc, char **argv);
+int sc_cmd_compare(int argc, char **argv);
+int sc_cmd_raster(int argc, char **argv);
+int sc_cmd_raster_check(int argc, char **argv);
 int sc_cmd_render(int argc, char **argv);
 
 /* One line "spherecull: <command>: <message>" on stderr. */

@@ -14,6 +14,9 @@
 static const sc_command commands[] = {
     { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
     { "bench-spheres", "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error", sc_cmd_bench_spheres },
+    { "compare", "every tracer vs an exact oracle: speed, disagreements, prefilter work", sc_cmd_compare },
+    { "raster", "rasterize a scene offscreen (OSMesa): preview, triangle IDs, depth", sc_cmd_raster },
+    { "raster-check", "raster ID buffer vs tracer primary hits: agreement, map, overlay", sc_cmd_raster_check },
     { "render", "trace a scene to a PNG: Lambert, shadows, AO, debug views", sc_cmd_render },
 };
 

@@ -1,0 +1,77 @@
+/* The side-by-side comparison behind 'spherecull compare': one scene, the
+ * seeded ray sets, every tracer, the exact oracle, and one row of metrics per
+ * ray set x tracer x thread count. Private to src/compare and the CLI. */
+#ifndef SPHERECULL_COMPARE_COMPARE_H
+#define SPHERECULL_COMPARE_COMPARE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "spherecull/sc_camera.h"
+#include "spherecull/sc_rays.h"
+
+enum { SC_CMP_MAX_THREADS = 8, SC_CMP_MAX_TRACERS = 32 };
+
+/* Work counted inside a tracer (prefilter tracers only; zero otherwise). */
+typedef struct sc_cmp_counters {
+    uint64_t rays, sphere_tests, sphere_rejects, tri_tests, tri_hits, false_positives;
+} sc_cmp_counters;
+
+typedef struct sc_cmp_options {
+    unsigned ray_kinds;                 /* bit per sc_rayset_kind */
+    const char *tracers[SC_CMP_MAX_TRACERS];
+    int ntracers;                       /* 0: every available tracer */
+    int threads[SC_CMP_MAX_THREADS];
+    int nthreads;
+    size_t oracle_rays;                 /* oracle sample per set (0: no oracle) */
+    int repeats;                        /* timed runs per row; the median is reported */
+    int width, height;                  /* primary rays (the scene camera's aspect is kept) */
+    size_t random_rays, adversarial_rays;
+    uint64_t seed;
+    int oracle_threads;
+} sc_cmp_options;
+
+void sc_cmp_options_default(sc_cmp_options *o);
+
+typedef struct sc_cmp_row {
+    char scene[64];
+    uint32_t triangles;
+    int closed;
+    sc_rayset_kind rays;
+    size_t nrays;
+    char tracer[40];
+    int threads;
+    double mrays_per_s;
+    double speed_vs_embree;             /* mrays / embree's at the same threads; NaN if none */
+    size_t oracle_rays;
+    size_t hit_miss_disagree, primid_disagree, holes, hole_rays;
+    double t_err_median, t_err_max;
+    double sphere_tests_per_ray, sphere_reject_rate, false_positive_rate, tri_tests_per_ray;
+    double bytes_per_tri;
+    int has_prefilter_stats;
+} sc_cmp_row;
+
+typedef struct sc_cmp_rows {
+    sc_cmp_row *rows;
+    size_t count, cap;
+} sc_cmp_rows;
+
+void sc_cmp_rows_free(sc_cmp_rows *r);
+
+/* Names of the tracers this build has, in table order; *count set. */
+const char *const *sc_cmp_tracer_names(int *count);
+
+/* Runs everything for one scene and appends rows. light: point light for
+ * shadow rays. log (may be NULL) gets progress lines. On error err holds one
+ * line. */
+sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
+                       const float light[3], const sc_cmp_options *opt, sc_cmp_rows *out, FILE *log,
+                       char *err, size_t errlen);
+
+/* Output helpers (0 on success). */
+int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f);
+int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f);
+void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f);
+
+#endif

@@ -1,0 +1,152 @@
+/* Mesh checks, bounds, welding and the edge table. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh_edges.h"
+
+sc_status sc_mesh_view_check(const sc_mesh_view *mesh)
+{
+    if (!mesh || !mesh->positions || !mesh->indices || mesh->vertex_count == 0 ||
+        mesh->triangle_count == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; i++)
+        if (!isfinite(mesh->positions[i]))
+            return SC_ERR_NONFINITE;
+    for (size_t i = 0; i < 3 * (size_t)mesh->triangle_count; i++)
+        if (mesh->indices[i] >= mesh->vertex_count)
+            return SC_ERR_INVALID_ARGUMENT;
+    return SC_OK;
+}
+
+sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
+{
+    if (!mesh || !mesh->positions || !mesh->indices || !lo || !hi || mesh->triangle_count == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (size_t i = 0; i < 3 * (size_t)mesh->triangle_count; i++) {
+        uint32_t v = mesh->indices[i];
+        if (v >= mesh->vertex_count)
+            return SC_ERR_INVALID_ARGUMENT;
+        for (int k = 0; k < 3; k++) {
+            float x = mesh->positions[3 * (size_t)v + k];
+            if (!isfinite(x))
+                return SC_ERR_NONFINITE;
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    }
+    return SC_OK;
+}
+
+typedef struct weld_key {
+    float p[3];
+    uint32_t index;
+} weld_key;
+
+static int cmp_pos(const void *pa, const void *pb)
+{
+    const weld_key *a = pa, *b = pb;
+    for (int k = 0; k < 3; k++)
+        if (a->p[k] != b->p[k])
+            return a->p[k] < b->p[k] ? -1 : 1;
+    return (a->index > b->index) - (a->index < b->index);
+}
+
+static int cmp_edge(const void *pa, const void *pb)
+{
+    const sc_edge *a = pa, *b = pb;
+    if (a->a != b->a) return a->a < b->a ? -1 : 1;
+    if (a->b != b->b) return a->b < b->b ? -1 : 1;
+    return (a->tri > b->tri) - (a->tri < b->tri);
+}
+
+int sc_edge_table_tri_ok(const sc_edge_table *t, const sc_mesh_view *mesh, uint32_t tri)
+{
+    const uint32_t *ix = mesh->indices + 3 * (size_t)tri;
+    uint32_t a = t->canon[ix[0]], b = t->canon[ix[1]], c = t->canon[ix[2]];
+    return a != b && b != c && a != c;
+}
+
+sc_status sc_edge_table_build(const sc_mesh_view *mesh, sc_edge_table *out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    sc_status st = sc_mesh_view_check(mesh);
+    if (st != SC_OK)
+        return st;
+    size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
+    weld_key *order = malloc(nv * sizeof *order);
+    out->canon = malloc(nv * sizeof *out->canon);
+    out->edges = malloc(3 * nt * sizeof *out->edges);
+    if (!order || !out->canon || !out->edges) {
+        free(order);
+        sc_edge_table_free(out);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t i = 0; i < nv; i++) {
+        memcpy(order[i].p, &mesh->positions[3 * i], sizeof order[i].p);
+        order[i].index = (uint32_t)i;
+    }
+    qsort(order, nv, sizeof *order, cmp_pos);
+    for (size_t i = 0; i < nv;) {
+        size_t j = i + 1;
+        while (j < nv && order[j].p[0] == order[i].p[0] && order[j].p[1] == order[i].p[1] &&
+               order[j].p[2] == order[i].p[2])
+            j++;
+        for (size_t k = i; k < j; k++)
+            out->canon[order[k].index] = order[i].index;
+        i = j;
+    }
+    free(order);
+    size_t ne = 0;
+    for (size_t t = 0; t < nt; t++) {
+        if (!sc_edge_table_tri_ok(out, mesh, (uint32_t)t))
+            continue;
+        const uint32_t *ix = mesh->indices + 3 * t;
+        for (int e = 0; e < 3; e++) {
+            uint32_t a = out->canon[ix[e]], b = out->canon[ix[(e + 1) % 3]];
+            out->edges[ne].a = a < b ? a : b;
+            out->edges[ne].b = a < b ? b : a;
+            out->edges[ne].tri = (uint32_t)t;
+            ne++;
+        }
+    }
+    qsort(out->edges, ne, sizeof *out->edges, cmp_edge);
+    out->count = ne;
+    return SC_OK;
+}
+
+void sc_edge_table_free(sc_edge_table *t)
+{
+    if (!t)
+        return;
+    free(t->canon);
+    free(t->edges);
+    memset(t, 0, sizeof *t);
+}
+
+sc_status sc_mesh_is_closed(const sc_mesh_view *mesh, int *closed)
+{
+    if (!closed)
+        return SC_ERR_INVALID_ARGUMENT;
+    *closed = 0;
+    sc_edge_table t;
+    sc_status st = sc_edge_table_build(mesh, &t);
+    if (st != SC_OK)
+        return st;
+    int ok = t.count > 0;
+    for (size_t i = 0; i < t.count && ok;) {
+        size_t j = i + 1;
+        while (j < t.count && t.edges[j].a == t.edges[i].a && t.edges[j].b == t.edges[i].b)
+            j++;
+        if (j - i != 2)
+            ok = 0;
+        i = j;
+    }
+    *closed = ok;
+    sc_edge_table_free(&t);
+    return SC_OK;
+}

@@ -1,0 +1,402 @@
+/* The exact ray oracle (see oracle.h). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <mpfr.h>
+
+#include "oracle.h"
+#include "sc_ref_ray.h"
+
+enum { CLUSTER = 32 };
+
+/* Relative slack of the double filter: the computations below have a
+ * rounding error of at most ~1e-15 of the bounds they are compared with. */
+#define REL 1e-12
+
+typedef struct oracle_mesh {
+    size_t ntri, nclusters;
+    double (*v)[9];          /* triangles in cluster order */
+    uint32_t *id;            /* original triangle ids */
+    double (*box)[6];        /* padded cluster boxes */
+} oracle_mesh;
+
+typedef struct cand {
+    double t_lo;
+    uint32_t k;              /* index into oracle_mesh order */
+} cand;
+
+typedef struct job {
+    const oracle_mesh *m;
+    const sc_ray *rays;
+    sc_oracle_hit *hits;
+    size_t begin, end;
+    uint64_t candidates, exact_calls;
+    int failed;
+    int flags;
+} job;
+
+static uint64_t spread3(uint32_t x)
+{
+    uint64_t v = x & 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+}
+
+typedef struct mkey {
+    uint64_t code;
+    uint32_t tri;
+} mkey;
+
+static int cmp_mkey(const void *pa, const void *pb)
+{
+    const mkey *a = pa, *b = pb;
+    if (a->code != b->code)
+        return a->code < b->code ? -1 : 1;
+    return (a->tri > b->tri) - (a->tri < b->tri);
+}
+
+static int cmp_cand(const void *pa, const void *pb)
+{
+    const cand *a = pa, *b = pb;
+    if (a->t_lo != b->t_lo)
+        return a->t_lo < b->t_lo ? -1 : 1;
+    return (a->k > b->k) - (a->k < b->k);
+}
+
+static sc_status mesh_prepare(const sc_mesh_view *mesh, oracle_mesh *m)
+{
+    memset(m, 0, sizeof *m);
+    size_t nt = mesh->triangle_count;
+    float lo[3], hi[3];
+    sc_status st = sc_mesh_bounds(mesh, lo, hi);
+    if (st != SC_OK)
+        return st;
+    mkey *keys = malloc(nt * sizeof *keys);
+    m->v = malloc(nt * sizeof *m->v);
+    m->id = malloc(nt * sizeof *m->id);
+    m->nclusters = (nt + CLUSTER - 1) / CLUSTER;
+    m->box = malloc(m->nclusters * sizeof *m->box);
+    if (!keys || !m->v || !m->id || !m->box) {
+        free(keys);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    m->ntri = nt;
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t q[3];
+        for (int a = 0; a < 3; a++) {
+            double c = 0;
+            for (int j = 0; j < 3; j++)
+                c += mesh->positions[3 * (size_t)mesh->indices[3 * t + j] + a];
+            double ext = (double)hi[a] - lo[a];
+            double f = ext > 0 ? (c / 3 - lo[a]) / ext : 0;
+            f = f < 0 ? 0 : f > 1 ? 1 : f;
+            q[a] = (uint32_t)(f * 2097151.0);
+        }
+        keys[t].code = spread3(q[0]) | spread3(q[1]) << 1 | spread3(q[2]) << 2;
+        keys[t].tri = (uint32_t)t;
+    }
+    qsort(keys, nt, sizeof *keys, cmp_mkey);
+    for (size_t k = 0; k < nt; k++) {
+        uint32_t t = keys[k].tri;
+        m->id[k] = t;
+        for (int j = 0; j < 3; j++)
+            for (int a = 0; a < 3; a++)
+                m->v[k][3 * j + a] = mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + j] + a];
+    }
+    free(keys);
+    for (size_t c = 0; c < m->nclusters; c++) {
+        double *b = m->box[c];
+        b[0] = b[1] = b[2] = INFINITY;
+        b[3] = b[4] = b[5] = -INFINITY;
+        for (size_t k = c * CLUSTER; k < (c + 1) * CLUSTER && k < nt; k++)
+            for (int j = 0; j < 3; j++)
+                for (int a = 0; a < 3; a++) {
+                    double x = m->v[k][3 * j + a];
+                    if (x < b[a]) b[a] = x;
+                    if (x > b[3 + a]) b[3 + a] = x;
+                }
+        /* generous padding: the slab test below only needs to err outwards */
+        for (int a = 0; a < 3; a++) {
+            double pad = 1e-7 * ((b[3 + a] - b[a]) + fmax(fabs(b[a]), fabs(b[3 + a]))) + 1e-300;
+            b[a] -= pad;
+            b[3 + a] += pad;
+        }
+    }
+    return SC_OK;
+}
+
+static void mesh_release(oracle_mesh *m)
+{
+    free(m->v), free(m->id), free(m->box);
+    memset(m, 0, sizeof *m);
+}
+
+static int box_may_hit(const double *b, const double O[3], const double D[3], double tmin, double tmax)
+{
+    double tn = -INFINITY, tf = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (D[a] == 0) {
+            if (O[a] < b[a] || O[a] > b[3 + a])
+                return 0;
+            continue;
+        }
+        double t1 = (b[a] - O[a]) / D[a], t2 = (b[3 + a] - O[a]) / D[a];
+        if (t1 > t2) {
+            double s = t1;
+            t1 = t2, t2 = s;
+        }
+        if (t1 > tn) tn = t1;
+        if (t2 < tf) tf = t2;
+    }
+    double slack = 1e-9 * (fabs(tn) + fabs(tf));
+    if (isnan(slack))
+        return 1;
+    if (tn > tf + slack)
+        return 0;
+    if (tf < tmin - 1e-9 * fabs(tmin) - slack)
+        return 0;
+    if (tn > tmax + 1e-9 * fabs(tmax) + slack)
+        return 0;
+    return 1;
+}
+
+static double dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static double l1(const double a[3])
+{
+    return fabs(a[0]) + fabs(a[1]) + fabs(a[2]);
+}
+static void cross(double o[3], const double a[3], const double b[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* 0: the triangle certainly misses within [tmin, tmax]. Else 1 and *t_lo is
+ * a lower bound of its exact t (tmin when unknown). The L1 norms bound the
+ * magnitude of every product summed, so REL times them bounds the rounding. */
+static int filter(const double *v, const double O[3], const double D[3], double tmin, double tmax,
+                  double *t_lo)
+{
+    double a[3], b[3], c[3], x[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = v[k] - O[k];
+        b[k] = v[3 + k] - O[k];
+        c[k] = v[6 + k] - O[k];
+    }
+    double dl = l1(D), al = l1(a), bl = l1(b), cl = l1(c);
+    cross(x, b, c);
+    double v0 = dot(D, x), e0 = REL * dl * bl * cl;
+    cross(x, c, a);
+    double v1 = dot(D, x), e1 = REL * dl * cl * al;
+    cross(x, a, b);
+    double v2 = dot(D, x), e2 = REL * dl * al * bl;
+    int pos = v0 > e0 || v1 > e1 || v2 > e2;
+    int neg = v0 < -e0 || v1 < -e1 || v2 < -e2;
+    if (pos && neg)
+        return 0;
+    *t_lo = tmin;
+    double f1[3], f2[3], n[3];
+    for (int k = 0; k < 3; k++)
+        f1[k] = v[3 + k] - v[k], f2[k] = v[6 + k] - v[k];
+    cross(n, f1, f2);
+    double nl = l1(f1) * l1(f2);
+    double num = dot(a, n), en = REL * al * nl;
+    double den = dot(D, n), ed = REL * dl * nl;
+    if (!(fabs(den) > 2 * ed))
+        return 1;                                   /* near-parallel: decide exactly */
+    double q[4] = { (num - en) / (den - ed), (num - en) / (den + ed), (num + en) / (den - ed),
+                    (num + en) / (den + ed) };
+    double lo = q[0], hi = q[0];
+    for (int k = 1; k < 4; k++) {
+        if (q[k] < lo) lo = q[k];
+        if (q[k] > hi) hi = q[k];
+    }
+    lo -= REL * fabs(lo);
+    hi += REL * fabs(hi);
+    if (hi < tmin || lo > tmax)
+        return 0;
+    *t_lo = lo > tmin ? lo : tmin;
+    return 1;
+}
+
+static void *run_job(void *arg)
+{
+    job *j = arg;
+    const oracle_mesh *m = j->m;
+    size_t cap = 256, nc = 0;
+    cand *cs = malloc(cap * sizeof *cs);
+    mpfr_t best, t;
+    mpfr_init2(best, 256);
+    mpfr_init2(t, 256);
+    if (!cs) {
+        j->failed = 1;
+        goto out;
+    }
+    for (size_t i = j->begin; i < j->end; i++) {
+        const sc_ray *r = &j->rays[i];
+        const double O[3] = { r->org[0], r->org[1], r->org[2] };
+        const double D[3] = { r->dir[0], r->dir[1], r->dir[2] };
+        const double tmin = r->tmin, tmax = r->tmax;
+        sc_oracle_hit *h = &j->hits[i];
+        memset(h, 0, sizeof *h);
+        h->t = INFINITY;
+        nc = 0;
+        for (size_t c = 0; c < m->nclusters; c++) {
+            if (!box_may_hit(m->box[c], O, D, tmin, tmax))
+                continue;
+            size_t end = (c + 1) * CLUSTER < m->ntri ? (c + 1) * CLUSTER : m->ntri;
+            for (size_t k = c * CLUSTER; k < end; k++) {
+                double tl;
+                if (!filter(m->v[k], O, D, tmin, tmax, &tl))
+                    continue;
+                if (nc == cap) {
+                    cand *ncs = realloc(cs, 2 * cap * sizeof *cs);
+                    if (!ncs) {
+                        j->failed = 1;
+                        goto out;
+                    }
+                    cs = ncs, cap *= 2;
+                }
+                cs[nc].t_lo = tl;
+                cs[nc].k = (uint32_t)k;
+                nc++;
+            }
+        }
+        j->candidates += nc;
+        qsort(cs, nc, sizeof *cs, cmp_cand);
+        int have = 0, later = 0;
+        size_t q = 0;
+        for (; q < nc; q++) {
+            /* every later candidate starts beyond the best exact t: done */
+            if (have && mpfr_cmp_d(best, cs[q].t_lo) < 0)
+                break;
+            const double *v = m->v[cs[q].k];
+            j->exact_calls++;
+            if (!sc_ref_ray_triangle_mpfr(O, D, tmin, tmax, v, v + 3, v + 6, t))
+                continue;
+            uint32_t id = m->id[cs[q].k];
+            int cmp = have ? mpfr_cmp(t, best) : -1;
+            if (cmp > 0)
+                later = 1;
+            if (cmp < 0) {
+                later |= have;                     /* the old best lies beyond */
+                mpfr_set_prec(best, mpfr_get_prec(t));
+                mpfr_set(best, t, MPFR_RNDN);
+                have = 1;
+                h->tie_count = 0;
+            }
+            if (cmp <= 0) {
+                if (h->tie_count < SC_ORACLE_MAX_TIES)
+                    h->ties[h->tie_count] = id;
+                h->tie_count++;
+            }
+        }
+        if (have && !later && (j->flags & SC_ORACLE_LATER_HIT))
+            for (; q < nc && !later; q++) {
+                const double *v = m->v[cs[q].k];
+                j->exact_calls++;
+                if (sc_ref_ray_triangle_mpfr(O, D, tmin, tmax, v, v + 3, v + 6, t) && mpfr_cmp(t, best) > 0)
+                    later = 1;
+            }
+        h->crosses = have && later;
+        if (have) {
+            h->hit = 1;
+            h->t = mpfr_get_d(best, MPFR_RNDN);
+            uint32_t nt = h->tie_count < SC_ORACLE_MAX_TIES ? h->tie_count : SC_ORACLE_MAX_TIES;
+            for (uint32_t a = 1; a < nt; a++)          /* insertion sort: tiny sets */
+                for (uint32_t b = a; b > 0 && h->ties[b - 1] > h->ties[b]; b--) {
+                    uint32_t s = h->ties[b];
+                    h->ties[b] = h->ties[b - 1], h->ties[b - 1] = s;
+                }
+        }
+    }
+out:
+    free(cs);
+    mpfr_clear(best);
+    mpfr_clear(t);
+    mpfr_free_cache();
+    return NULL;
+}
+
+sc_status sc_oracle_run(const sc_mesh_view *mesh, const sc_ray *rays, size_t n, int threads,
+                        int flags, sc_oracle *out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if ((n && !rays) || threads < 1 || threads > 256 || (flags & ~SC_ORACLE_LATER_HIT))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_status st = sc_mesh_view_check(mesh);
+    if (st != SC_OK)
+        return st;
+    oracle_mesh m;
+    if ((st = mesh_prepare(mesh, &m)) != SC_OK) {
+        mesh_release(&m);
+        return st;
+    }
+    out->hits = malloc((n ? n : 1) * sizeof *out->hits);
+    job *jobs = calloc((size_t)threads, sizeof *jobs);
+    pthread_t *tid = calloc((size_t)threads, sizeof *tid);
+    char *started = calloc((size_t)threads, 1);
+    if (!out->hits || !jobs || !tid || !started) {
+        free(jobs), free(tid), free(started), mesh_release(&m), sc_oracle_free(out);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    out->count = n;
+    for (int k = 0; k < threads; k++) {
+        jobs[k] = (job){ &m, rays, out->hits, n * (size_t)k / (size_t)threads,
+                         n * (size_t)(k + 1) / (size_t)threads, 0, 0, 0, flags };
+        if (k > 0 && pthread_create(&tid[k], NULL, run_job, &jobs[k]) == 0)
+            started[k] = 1;
+        else if (k > 0)
+            run_job(&jobs[k]);
+    }
+    run_job(&jobs[0]);
+    int failed = jobs[0].failed;
+    for (int k = 1; k < threads; k++) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        failed |= jobs[k].failed;
+    }
+    for (int k = 0; k < threads; k++) {
+        out->candidates += jobs[k].candidates;
+        out->exact_calls += jobs[k].exact_calls;
+    }
+    free(jobs), free(tid), free(started), mesh_release(&m);
+    if (failed) {
+        sc_oracle_free(out);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    return SC_OK;
+}
+
+void sc_oracle_free(sc_oracle *o)
+{
+    if (!o)
+        return;
+    free(o->hits);
+    memset(o, 0, sizeof *o);
+}
+
+int sc_oracle_accepts(const sc_oracle *o, size_t i, uint32_t prim)
+{
+    if (!o || i >= o->count || !o->hits[i].hit)
+        return 0;
+    const sc_oracle_hit *h = &o->hits[i];
+    uint32_t nt = h->tie_count < SC_ORACLE_MAX_TIES ? h->tie_count : SC_ORACLE_MAX_TIES;
+    for (uint32_t k = 0; k < nt; k++)
+        if (h->ties[k] == prim)
+            return 1;
+    return h->tie_count > SC_ORACLE_MAX_TIES;
+}

@@ -1,0 +1,233 @@
+/* The Embree back end against the exact oracle: native modes agree away
+ * from edges; the user-geometry drop-in (sphere prefilter + watertight test)
+ * loses no hit at vertices and edges of a closed mesh, and its prefilter
+ * never changes a hit compared with the same clusters without spheres. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "common/sc_rng.h"
+#include "compare/oracle.h"
+#include "compare/procedural.h"
+#include "spherecull/sc_embree.h"
+
+static sc_embree *make(const sc_mesh_view *m, sc_embree_mode mode, int cluster, sc_embree_quality q)
+{
+    sc_embree_config cfg;
+    sc_embree_config_default(&cfg);
+    cfg.mode = mode;
+    cfg.quality = q;
+    cfg.cluster_size = cluster;
+    sc_embree *e = NULL;
+    assert_int_equal(sc_embree_create(m, &cfg, &e), SC_OK);
+    assert_non_null(e);
+    return e;
+}
+
+/* Rays from outside the unit sphere at interior points of random triangles,
+ * barycentrics at least 0.1 from every edge. */
+static sc_ray *interior_rays(const sc_proc_mesh *pm, size_t n, uint64_t seed, uint32_t *target)
+{
+    sc_ray *r = malloc(n * sizeof *r);
+    assert_non_null(r);
+    sc_rng g;
+    sc_rng_seed(&g, seed);
+    for (size_t i = 0; i < n; i++) {
+        uint32_t t = (uint32_t)(sc_rng_next(&g) % pm->triangle_count);
+        double a = sc_rng_range(&g, 0.1, 0.8), b = sc_rng_range(&g, 0.1, 0.9 - a), c = 1 - a - b;
+        double P[3], N[3];
+        for (int k = 0; k < 3; k++) {
+            const uint32_t *ix = pm->indices + 3 * (size_t)t;
+            P[k] = a * pm->positions[3 * ix[0] + k] + b * pm->positions[3 * ix[1] + k] +
+                   c * pm->positions[3 * ix[2] + k];
+            N[k] = P[k];
+        }
+        /* from outside, within 60 degrees of the outward normal */
+        double w[3];
+        for (int k = 0; k < 3; k++)
+            w[k] = N[k] + sc_rng_range(&g, -0.5, 0.5);
+        for (int k = 0; k < 3; k++) {
+            r[i].org[k] = (float)(P[k] + 2 * w[k]);
+            r[i].dir[k] = (float)(-2 * w[k]);
+        }
+        r[i].tmin = 0, r[i].tmax = INFINITY;
+        target[i] = t;
+    }
+    return r;
+}
+
+static void test_native_matches_oracle_away_from_edges(void **state)
+{
+    (void)state;
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
+    sc_mesh_view m = sc_proc_view(&pm);
+    enum { N = 2000 };
+    uint32_t *target = malloc(N * sizeof *target);
+    sc_ray *rays = interior_rays(&pm, N, 3, target);
+    sc_oracle o;
+    assert_int_equal(sc_oracle_run(&m, rays, N, 2, 0, &o), SC_OK);
+    sc_hitrec *h = malloc(N * sizeof *h);
+    uint8_t *occ = malloc(N);
+    const sc_embree_mode modes[] = { SC_EMBREE_DEFAULT, SC_EMBREE_ROBUST, SC_EMBREE_USER_PREFILTER,
+                                     SC_EMBREE_USER_PLAIN };
+    for (int mi = 0; mi < 4; mi++)
+        for (int q = 0; q < 2; q++) {
+            sc_embree *e = make(&m, modes[mi], q ? 16 : 8, (sc_embree_quality)q);
+            assert_int_equal(sc_embree_intersect1(e, rays, N, h, NULL), SC_OK);
+            for (size_t i = 0; i < N; i++) {
+                assert_true(o.hits[i].hit);
+                assert_int_equal(o.hits[i].tie_count, 1);
+                assert_int_equal(o.hits[i].ties[0], target[i]);   /* the sphere is convex */
+                assert_int_equal(h[i].prim, target[i]);
+                assert_true(fabs(h[i].t - o.hits[i].t) <= 1e-5 * o.hits[i].t);
+            }
+            assert_int_equal(sc_embree_occluded1(e, rays, N, occ, NULL), SC_OK);
+            for (size_t i = 0; i < N; i++)
+                assert_int_equal(occ[i], 1);
+            sc_embree_destroy(e);
+        }
+    sc_oracle_free(&o);
+    free(h), free(occ), free(rays), free(target);
+    sc_proc_free(&pm);
+}
+
+static void test_packets_match_single_rays(void **state)
+{
+    (void)state;
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
+    sc_mesh_view m = sc_proc_view(&pm);
+    enum { N = 1003 };                 /* not a multiple of the packet width */
+    uint32_t *target = malloc(N * sizeof *target);
+    sc_ray *rays = interior_rays(&pm, N, 4, target);
+    sc_hitrec *h1 = malloc(N * sizeof *h1), *hp = malloc(N * sizeof *hp);
+    for (int mode = 0; mode < 2; mode++) {
+        sc_embree *e = make(&m, mode ? SC_EMBREE_USER_PREFILTER : SC_EMBREE_DEFAULT, 8,
+                            SC_EMBREE_QUALITY_MEDIUM);
+        assert_int_equal(sc_embree_intersect1(e, rays, N, h1, NULL), SC_OK);
+        for (int w = 8; w <= 16; w += 8) {
+            assert_int_equal(sc_embree_intersect_packets(e, w, rays, N, hp, NULL), SC_OK);
+            for (size_t i = 0; i < N; i++) {
+                assert_int_equal(hp[i].prim, target[i]);
+                assert_int_equal(h1[i].prim, target[i]);
+                assert_true(fabs(hp[i].t - h1[i].t) <= 1e-6 * h1[i].t);
+            }
+        }
+        assert_int_equal(sc_embree_intersect_packets(e, 4, rays, N, hp, NULL), SC_ERR_INVALID_ARGUMENT);
+        sc_embree_destroy(e);
+    }
+    free(h1), free(hp), free(rays), free(target);
+    sc_proc_free(&pm);
+}
+
+/* The drop-in on adversarial rays: no lost hit against the oracle on the
+ * closed sphere, identical hits with and without the sphere test, and the
+ * counters add up. */
+static void test_user_prefilter_no_lost_hits(void **state)
+{
+    (void)state;
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
+    sc_mesh_view m = sc_proc_view(&pm);
+    sc_rayset s;
+    assert_int_equal(sc_rayset_adversarial(&m, 4000, 21, &s), SC_OK);
+    sc_oracle o;
+    assert_int_equal(sc_oracle_run(&m, s.rays, s.count, 2, SC_ORACLE_LATER_HIT, &o), SC_OK);
+    sc_hitrec *hp = malloc(s.count * sizeof *hp), *hn = malloc(s.count * sizeof *hn);
+    uint8_t *occ = malloc(s.count);
+    for (int cl = 8; cl <= 16; cl += 8) {
+        sc_embree *pre = make(&m, SC_EMBREE_USER_PREFILTER, cl, SC_EMBREE_QUALITY_MEDIUM);
+        sc_embree *plain = make(&m, SC_EMBREE_USER_PLAIN, cl, SC_EMBREE_QUALITY_MEDIUM);
+        sc_embree_counters cp, cn;
+        memset(&cp, 0, sizeof cp), memset(&cn, 0, sizeof cn);
+        assert_int_equal(sc_embree_intersect1(pre, s.rays, s.count, hp, &cp), SC_OK);
+        assert_int_equal(sc_embree_intersect1(plain, s.rays, s.count, hn, &cn), SC_OK);
+        size_t lost = 0, edge_rays = 0;
+        for (size_t i = 0; i < s.count; i++) {
+            /* the prefilter only skips triangles the ray cannot hit */
+            assert_int_equal(hp[i].prim, hn[i].prim);
+            assert_true(hp[i].t == hn[i].t || hp[i].prim == SC_HITREC_MISS);
+            /* rays that pass through the closed surface at a vertex or edge;
+             * rays that only touch it there (tangent) may go either way */
+            if (s.tag[i] != SC_RAY_TAG_GRAZING && o.hits[i].crosses) {
+                edge_rays++;
+                lost += hp[i].prim == SC_HITREC_MISS;
+            }
+            /* whatever it hits is at the exact first-hit distance (not
+             * for grazing rays: there t is ill-conditioned by 1/angle) */
+            if (hp[i].prim != SC_HITREC_MISS && o.hits[i].hit && s.tag[i] != SC_RAY_TAG_GRAZING)
+                assert_true(fabs(hp[i].t - o.hits[i].t) <= 1e-5 * o.hits[i].t);
+        }
+        assert_true(edge_rays > 1000);
+        assert_int_equal(lost, 0);
+        assert_int_equal(sc_embree_occluded1(pre, s.rays, s.count, occ, NULL), SC_OK);
+        for (size_t i = 0; i < s.count; i++)
+            assert_int_equal(occ[i], hp[i].prim != SC_HITREC_MISS);
+        assert_int_equal(cp.rays, s.count);
+        assert_true(cp.sphere_tests > 0 && cp.sphere_rejects > 0 && cp.sphere_rejects < cp.sphere_tests);
+        assert_int_equal(cp.tri_tests, cp.sphere_tests - cp.sphere_rejects);
+        assert_int_equal(cp.false_positives, cp.tri_tests - cp.tri_hits);
+        assert_true(cp.tri_tests < cn.tri_tests);
+        assert_int_equal(cn.sphere_tests, 0);
+        assert_int_equal(cp.cluster_calls, cn.cluster_calls);
+        sc_embree_info ip, in;
+        assert_int_equal(sc_embree_get_info(pre, &ip), SC_OK);
+        assert_int_equal(sc_embree_get_info(plain, &in), SC_OK);
+        assert_true(ip.clusters > 0 && ip.mean_cluster_size > cl / 2.0 && ip.mean_cluster_size <= cl);
+        assert_true(ip.embree_bytes > 0 && ip.ours_bytes > 0);
+        sc_embree_destroy(pre);
+        sc_embree_destroy(plain);
+    }
+    free(hp), free(hn), free(occ);
+    sc_oracle_free(&o);
+    sc_rayset_free(&s);
+    sc_proc_free(&pm);
+}
+
+static void test_memory_and_arguments(void **state)
+{
+    (void)state;
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
+    sc_mesh_view m = sc_proc_view(&pm);
+    sc_embree *e = make(&m, SC_EMBREE_DEFAULT, 8, SC_EMBREE_QUALITY_MEDIUM);
+    sc_embree_info info;
+    assert_int_equal(sc_embree_get_info(e, &info), SC_OK);
+    assert_int_equal(info.triangles, m.triangle_count);
+    /* the monitor saw at least the vertex and index copies */
+    assert_true(info.embree_bytes >= 12 * (size_t)m.triangle_count);
+    assert_true(info.embree_peak_bytes >= info.embree_bytes);
+    assert_int_equal(info.ours_bytes, 0);
+    assert_int_equal(sc_embree_intersect1(e, NULL, 3, NULL, NULL), SC_ERR_INVALID_ARGUMENT);
+    sc_embree_destroy(e);
+
+    sc_embree_config cfg;
+    sc_embree_config_default(&cfg);
+    cfg.mode = SC_EMBREE_USER_PREFILTER;
+    cfg.cluster_size = 17;
+    assert_int_equal(sc_embree_create(&m, &cfg, &e), SC_ERR_INVALID_ARGUMENT);
+    assert_null(e);
+    cfg.cluster_size = 8;
+    cfg.mode = (sc_embree_mode)99;
+    assert_int_equal(sc_embree_create(&m, &cfg, &e), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_embree_create(NULL, &cfg, &e), SC_ERR_INVALID_ARGUMENT);
+    sc_embree_destroy(NULL);
+    sc_proc_free(&pm);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_native_matches_oracle_away_from_edges),
+        cmocka_unit_test(test_packets_match_single_rays),
+        cmocka_unit_test(test_user_prefilter_no_lost_hits),
+        cmocka_unit_test(test_memory_and_arguments),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
