@@ -180,6 +180,9 @@ static void run_scene(scene_case *sc)
                           (double)info.total_bytes / (double)(info.triangles ? info.triangles : 1),
                           info.leaves_with_spheres, info.leaves);
             assert_int_equal(res.bad, 0);
+            /* The auto rule (sc_bvh.h): blocks of 4 and 8 never get spheres. */
+            if (mode == SC_PREFILTER_AUTO && leaf_sizes[li] <= 8)
+                assert_int_equal(info.leaves_with_spheres, 0);
             /* A prefilter never changes a hit. */
             if (mode != 0) {
                 size_t diff = 0;

@@ -20,13 +20,24 @@
  *   circum   circumsphere of each triangle (conservative, sc_prefilter_sphere_f).
  *   minimal  minimal enclosing sphere of each triangle (conservative).
  *   auto     per leaf: minimal spheres are stored and used only where they are
- *            expected to pay. At build time SC_BVH_AUTO_SAMPLES isotropic random
- *            lines through the leaf's box are shot at its spheres; the leaf
- *            uses them iff the measured fraction of lines that all spheres
- *            reject (so the triangle test is skipped) is at least
- *            SC_BVH_AUTO_THRESHOLD, the measured cost ratio sphere block /
- *            triangle block (bench/bench_trace.c). Deterministic: the lines
- *            are seeded by leaf.
+ *            expected to pay. A block of spheres pays for a leaf iff
+ *            s * C_tri > C_sph, where s is the fraction of the rays reaching
+ *            the leaf that every sphere rejects (so the exact test is skipped)
+ *            and C_tri, C_sph are the costs of the triangle and sphere block
+ *            tests. Measured (bench/bench_leafcost, L1-resident, fastest of
+ *            21 runs, EPYC): C_sph / C_tri = 1.4..2.1 for blocks of 4 and 8
+ *            with AVX-512 (1.0..1.1 with AVX2): s would have to exceed 1, so
+ *            such leaves never get spheres; for blocks of 16 (9..16
+ *            triangles; the triangle test is two 8-wide passes, the sphere
+ *            test one) it is 0.5..0.75. So leaves of 9..16 triangles shoot
+ *            SC_BVH_AUTO_SAMPLES isotropic random lines through their box at
+ *            their spheres at build time and use them iff the fraction that
+ *            all spheres reject is at least SC_BVH_AUTO_THRESHOLD16.
+ *            Deterministic: the lines are seeded by leaf. On the shared
+ *            meshes (bunny, armadillo, Sponza) this switches spheres on for
+ *            0..1% of the leaves: the rule mostly says "off", which is what
+ *            the end-to-end timings of circum/minimal (5..17% slower than
+ *            off) say too.
  * Every mode returns exactly the same hits; only the work differs.
  */
 #ifndef SPHERECULL_SC_BVH_H
@@ -43,7 +54,7 @@ extern "C" {
 
 #define SC_BVH_MAX_LEAF 16
 #define SC_BVH_AUTO_SAMPLES 32
-#define SC_BVH_AUTO_THRESHOLD 0.5
+#define SC_BVH_AUTO_THRESHOLD16 0.75   /* the upper end of the measured C_sph / C_tri */
 
 typedef enum sc_prefilter_mode {
     SC_PREFILTER_OFF = 0,

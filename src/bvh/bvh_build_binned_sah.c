@@ -346,10 +346,12 @@ static uint64_t emit_leaf(builder *B, uint32_t bi)
     int spheres = mode != SC_PREFILTER_OFF;
     _Alignas(64) float sph[4 * 16];   /* passed to sc_reject* as a sphere block */
     if (mode == SC_PREFILTER_AUTO) {
-        if (B->dry) {
+        /* Blocks of 4 and 8 never qualify (a sphere block costs more than
+         * the triangle block it could skip), so they are not sampled. */
+        if (B->dry && W == 16) {
             leaf_spheres(B, leaf, SC_SPHERE_MINIMAL, W, sph);
             double rate = auto_skip_rate(leaf, sph, W, 0x5c0ffee ^ ((uint64_t)bi * 0x9e3779b97f4a7c15ull));
-            B->auto_use[bi] = rate >= SC_BVH_AUTO_THRESHOLD;
+            B->auto_use[bi] = rate >= SC_BVH_AUTO_THRESHOLD16;
         }
         spheres = B->auto_use[bi];
     }
@@ -405,6 +407,18 @@ static uint64_t emit_node(builder *B, const uint32_t *kids_in, int nk_in, int de
         const bnode *c = &B->bn[kids[best]];
         kids[best] = c->a;
         kids[nk++] = c->b;
+    }
+    /* Children by decreasing surface area: an any-hit query visits them in
+     * slot order, and a larger box is more likely to hold an occluder. */
+    for (int i = 1; i < nk; i++) {
+        uint32_t k = kids[i];
+        float a = box_area(&B->bn[k].box);
+        int j = i;
+        while (j > 0 && box_area(&B->bn[kids[j - 1]].box) < a) {
+            kids[j] = kids[j - 1];
+            j--;
+        }
+        kids[j] = k;
     }
     size_t my = B->node_used++;
     if (depth > B->max_depth)

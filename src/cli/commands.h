@@ -13,6 +13,7 @@ typedef struct sc_command {
 } sc_command;
 
 int sc_cmd_accuracy(int argc, char **argv);
+int sc_cmd_bench(int argc, char **argv);
 int sc_cmd_bench_spheres(int argc, char **argv);
 int sc_cmd_compare(int argc, char **argv);
 int sc_cmd_raster(int argc, char **argv);

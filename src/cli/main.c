@@ -13,6 +13,7 @@
 /* One row per subcommand; each subsystem adds its own. */
 static const sc_command commands[] = {
     { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
+    { "bench", "tracer Mrays/s per prefilter mode and leaf size, against Embree on the same rays", sc_cmd_bench },
     { "bench-spheres", "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error", sc_cmd_bench_spheres },
     { "compare", "every tracer vs an exact oracle: speed, disagreements, prefilter work", sc_cmd_compare },
     { "raster", "rasterize a scene offscreen (OSMesa): preview, triangle IDs, depth", sc_cmd_raster },

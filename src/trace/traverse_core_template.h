@@ -32,7 +32,7 @@ static inline __attribute__((always_inline)) void KFN(prefetch)(const sc_bvh *bv
 
 static inline __attribute__((always_inline)) KATTR int
 KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
-          const int ANY, const int STATS, const int MOLLER)
+          const int ANY, const int STATS, const int MOLLER, const int OCT)
 {
     sc_ray_pre p;
     sc_ray_precompute(ray, &p);
@@ -57,7 +57,7 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
             if (STATS)
                 st->nodes++;
             float dist[SC_BVH_N] __attribute__((aligned(32)));
-            unsigned m = KFN(node_test)(&ctx, node, tmin, tmax, dist);
+            unsigned m = KFN(node_test)(&ctx, node, tmin, tmax, dist, OCT, !ANY);
             if (!m)
                 goto pop;
             if ((m & (m - 1)) == 0) {
@@ -68,13 +68,11 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
                 /* Any hit ends the search, so order buys nothing (as in
                  * Embree's occlusion traversal): push all but the first. */
                 ref = node->child[__builtin_ctz(m)];
-                for (m &= m - 1; m; m &= m - 1) {
-                    uint64_t c = node->child[__builtin_ctz(m)];
-                    KFN(prefetch)(bvh, c);
-                    stack[sp].ref = c;
-                    stack[sp].dist = 0;
-                    sp++;
-                }
+                /* Pushed from the last slot down, so they pop in slot order
+                 * (the builder puts larger boxes first). No prefetch: most
+                 * pushed subtrees of a blocked shadow ray are never popped. */
+                for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
+                    stack[sp++].ref = node->child[31 - __builtin_clz(m)];
                 continue;
             }
             ref = sc_order_children(node, m, dist, stack, &sp);
@@ -139,28 +137,55 @@ done:
     return 0;
 }
 
+/* The statistics-free kernels are specialised per ray octant (the signs of
+ * the direction pick the near and far box planes at compile time); the
+ * counting kernels keep one generic body. */
+#define SC_OCTANT_SWITCH(CALL)                                                                         \
+    switch ((signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2) { \
+    case 0: CALL(0); break;                                                                            \
+    case 1: CALL(1); break;                                                                            \
+    case 2: CALL(2); break;                                                                            \
+    case 3: CALL(3); break;                                                                            \
+    case 4: CALL(4); break;                                                                            \
+    case 5: CALL(5); break;                                                                            \
+    case 6: CALL(6); break;                                                                            \
+    default: CALL(7); break;                                                                           \
+    }
+
 #define SC_DEFINE_KERNELS(TEST, MOLLER_FLAG)                                                           \
     static KATTR void KFN(closest_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)              \
     {                                                                                                  \
-        KFN(core)(b, r, h, NULL, 0, 0, MOLLER_FLAG);                                                   \
+        SC_OCTANT_SWITCH(SC_CALL_CLOSEST_##TEST)                                                       \
     }                                                                                                  \
     static KATTR int KFN(any_##TEST)(const sc_bvh *b, const sc_ray *r)                                 \
     {                                                                                                  \
-        return KFN(core)(b, r, NULL, NULL, 1, 0, MOLLER_FLAG);                                         \
+        int res;                                                                                       \
+        SC_OCTANT_SWITCH(SC_CALL_ANY_##TEST)                                                           \
+        return res;                                                                                    \
     }                                                                                                  \
     static KATTR void KFN(closest_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h,        \
                                                 sc_trace_stats *s)                                     \
     {                                                                                                  \
-        KFN(core)(b, r, h, s, 0, 1, MOLLER_FLAG);                                                      \
+        KFN(core)(b, r, h, s, 0, 1, MOLLER_FLAG, -1);                                                  \
     }                                                                                                  \
     static KATTR int KFN(any_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)        \
     {                                                                                                  \
-        return KFN(core)(b, r, NULL, s, 1, 1, MOLLER_FLAG);                                            \
+        return KFN(core)(b, r, NULL, s, 1, 1, MOLLER_FLAG, -1);                                        \
     }
+
+#define SC_CALL_CLOSEST_watertight(O) KFN(core)(b, r, h, NULL, 0, 0, 0, O)
+#define SC_CALL_ANY_watertight(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, 0, O)
+#define SC_CALL_CLOSEST_moller(O) KFN(core)(b, r, h, NULL, 0, 0, 1, O)
+#define SC_CALL_ANY_moller(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, 1, O)
 
 SC_DEFINE_KERNELS(watertight, 0)
 SC_DEFINE_KERNELS(moller, 1)
 #undef SC_DEFINE_KERNELS
+#undef SC_OCTANT_SWITCH
+#undef SC_CALL_CLOSEST_watertight
+#undef SC_CALL_ANY_watertight
+#undef SC_CALL_CLOSEST_moller
+#undef SC_CALL_ANY_moller
 
 const sc_trace_kernels KFN(sc_trace_kernels)[SC_TRI_TEST_COUNT] = {
     [SC_TRI_WATERTIGHT] = { KFN(closest_watertight), KFN(any_watertight),

@@ -11,8 +11,9 @@ typedef struct { const sc_ray_pre *p; } ctx_scalar;
 static inline void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p) { c->p = p; }
 
 static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,
-                                      float *dist)
+                                      float *dist, const int OCT, const int WANT_DIST)
 {
+    (void)OCT, (void)WANT_DIST;
     const sc_ray_pre *p = c->p;
     unsigned mask = 0;
     for (int i = 0; i < SC_BVH_N; i++) {

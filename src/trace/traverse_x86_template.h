@@ -7,7 +7,7 @@
 typedef struct {
     __m256 ord[3], rd[3], eps;
     size_t near_off[3], far_off[3];      /* byte offsets of rows in a node */
-    float okx, oky, okz, Sx, Sy, Sz;
+    __m256 okx, oky, okz, Sx, Sy, Sz, tmin;   /* broadcast once per ray, not per leaf */
     float org_s[3], dir_s[3];
     int kx, ky, kz;
 } KFN(ctx);
@@ -25,27 +25,41 @@ static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
     }
     c->eps = _mm256_set1_ps(p->slab_eps);
     c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
-    c->okx = p->org[p->kx], c->oky = p->org[p->ky], c->okz = p->org[p->kz];
-    c->Sx = p->Sx, c->Sy = p->Sy, c->Sz = p->Sz;
+    c->okx = _mm256_set1_ps(p->org[p->kx]);
+    c->oky = _mm256_set1_ps(p->org[p->ky]);
+    c->okz = _mm256_set1_ps(p->org[p->kz]);
+    c->Sx = _mm256_set1_ps(p->Sx);
+    c->Sy = _mm256_set1_ps(p->Sy);
+    c->Sz = _mm256_set1_ps(p->Sz);
+    c->tmin = _mm256_set1_ps(p->tmin);
 }
 
 static inline __attribute__((always_inline)) KATTR unsigned
-KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, float *dist)
+KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, float *dist,
+               const int OCT, const int WANT_DIST)
 {
     const char *nb = (const char *)node;
+    /* With the ray octant known at compile time (OCT >= 0) the near and far
+     * rows are fixed offsets: no per-ray offsets held in registers. */
+#define NEAR(k) (OCT >= 0 ? (size_t)(2 * (k) + ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->near_off[k])
+#define FAR(k) (OCT >= 0 ? (size_t)(2 * (k) + 1 - ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->far_off[k])
 #define ROW(off) _mm256_load_ps((const float *)(const void *)(nb + (off)))
-    __m256 tnx = _mm256_fmsub_ps(ROW(c->near_off[0]), c->rd[0], c->ord[0]);
-    __m256 tny = _mm256_fmsub_ps(ROW(c->near_off[1]), c->rd[1], c->ord[1]);
-    __m256 tnz = _mm256_fmsub_ps(ROW(c->near_off[2]), c->rd[2], c->ord[2]);
-    __m256 tfx = _mm256_fmsub_ps(ROW(c->far_off[0]), c->rd[0], c->ord[0]);
-    __m256 tfy = _mm256_fmsub_ps(ROW(c->far_off[1]), c->rd[1], c->ord[1]);
-    __m256 tfz = _mm256_fmsub_ps(ROW(c->far_off[2]), c->rd[2], c->ord[2]);
+    __m256 tnx = _mm256_fmsub_ps(ROW(NEAR(0)), c->rd[0], c->ord[0]);
+    __m256 tny = _mm256_fmsub_ps(ROW(NEAR(1)), c->rd[1], c->ord[1]);
+    __m256 tnz = _mm256_fmsub_ps(ROW(NEAR(2)), c->rd[2], c->ord[2]);
+    __m256 tfx = _mm256_fmsub_ps(ROW(FAR(0)), c->rd[0], c->ord[0]);
+    __m256 tfy = _mm256_fmsub_ps(ROW(FAR(1)), c->rd[1], c->ord[1]);
+    __m256 tfz = _mm256_fmsub_ps(ROW(FAR(2)), c->rd[2], c->ord[2]);
 #undef ROW
-    __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, _mm256_set1_ps(tmin)));
+#undef NEAR
+#undef FAR
+    (void)tmin;
+    __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, c->tmin));
     __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, _mm256_set1_ps(tmax)));
     tn = _mm256_fmsub_ps(tn, _mm256_set1_ps(SC_SLAB_DOWN), c->eps);
     tf = _mm256_fmadd_ps(tf, _mm256_set1_ps(SC_SLAB_UP), c->eps);
-    _mm256_store_ps(dist, tn);
+    if (WANT_DIST)
+        _mm256_store_ps(dist, tn);
 #if SC_X86_AVX512
     return (unsigned)_mm256_cmp_ps_mask(tn, tf, _CMP_LE_OQ);
 #else
@@ -53,11 +67,13 @@ KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, 
 #endif
 }
 
-/* Lanes [h, h+8) of a block of width W (4 lanes are zero-extended). */
+/* Lanes [h, h+8) of a block of width W. For W = 4 the upper lanes are
+ * undefined: every result is masked by `live` (< 16), and float garbage
+ * cannot trap (exceptions are masked), so the zero-extension is not paid. */
 static inline __attribute__((always_inline)) KATTR __m256 KFN(row8)(const float *row, unsigned W, unsigned h)
 {
     if (W == 4)
-        return _mm256_zextps128_ps256(_mm_load_ps(row));
+        return _mm256_castps128_ps256(_mm_load_ps(row));
     return _mm256_load_ps(row + h);
 }
 
@@ -73,8 +89,8 @@ KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsig
                  float tmin, float tmax, float *t, float *un, float *vn, float *den)
 {
     const int kx = c->kx, ky = c->ky, kz = c->kz;
-    const __m256 okx = _mm256_set1_ps(c->okx), oky = _mm256_set1_ps(c->oky), okz = _mm256_set1_ps(c->okz);
-    const __m256 Sx = _mm256_set1_ps(c->Sx), Sy = _mm256_set1_ps(c->Sy), Sz = _mm256_set1_ps(c->Sz);
+    const __m256 okx = c->okx, oky = c->oky, okz = c->okz;
+    const __m256 Sx = c->Sx, Sy = c->Sy, Sz = c->Sz;
 #define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
     __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
     __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
@@ -105,7 +121,8 @@ KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsig
     if (cand) {
         __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, Az), _mm256_mul_ps(V, Bz)), _mm256_mul_ps(Wv, Cz));
         __m256 tt = _mm256_div_ps(T, det);
-        __m256 in = _mm256_and_ps(_mm256_cmp_ps(tt, _mm256_set1_ps(tmin), _CMP_GE_OQ),
+        (void)tmin;
+        __m256 in = _mm256_and_ps(_mm256_cmp_ps(tt, c->tmin, _CMP_GE_OQ),
                                   _mm256_cmp_ps(tt, _mm256_set1_ps(tmax), _CMP_LE_OQ));
         hm = KFN(mask8)(in) & cand;
         if (hm) {
