@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Set-up, build, and the main job: render the default scene to out/bunny.png.
+# Set-up, build, and the main job: render the default scene to out/bunny.png,
+# then trace the same scene with our tracer and with Embree and print the
+# comparison (speed, disagreements with the exact oracle, prefilter work).
 # Extra arguments go to `spherecull render`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,5 +9,11 @@ cd "$(dirname "$0")/.."
 ./scripts/fetch-meshes.sh
 ./scripts/build.sh
 mkdir -p out
-./build/src/cli/spherecull render scenes/bunny.json -o out/bunny.png "$@"
+sc=./build/src/cli/spherecull
+$sc render scenes/bunny.json -o out/bunny.png "$@"
 echo "wrote out/bunny.png"
+echo
+$sc compare scenes/bunny.json \
+    --tracers spherecull-off,spherecull-minimal,spherecull-auto,embree,embree-robust,embree-p16,embree-user-prefilter \
+    --threads 1 --repeats 5 --oracle-rays 5000 --csv out/compare.csv
+echo "wrote out/compare.csv"
