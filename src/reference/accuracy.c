@@ -54,49 +54,32 @@ void sc_acc_ref_compute(sc_acc_ref *r, const double V[3][3])
 void sc_acc_eval(const sc_acc_variant *v, int as_float, const double V[3][3],
                  const sc_acc_ref *ref, sc_acc_result *out)
 {
+    /* One call sequence for both precisions: SUF picks the kernel family. */
+#define RUN_KERNEL(SUF, SPHERE, A, B, C)                                                   \
+    do {                                                                                  \
+        SPHERE s;                                                                         \
+        if (v->kind == SC_ACC_CIRCUM)                                                     \
+            out->status = sc_circumsphere_##SUF(A, B, C, v->method, v->origin, &s);       \
+        else if (v->kind == SC_ACC_MINIMAL)                                               \
+            out->status = sc_minimal_sphere_##SUF(A, B, C, v->method, v->origin, &s);     \
+        else                                                                              \
+            out->status = sc_prefilter_sphere_##SUF(A, B, C,                              \
+                v->kind == SC_ACC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL, \
+                v->method, &s);                                                           \
+        for (int i = 0; i < 3; i++)                                                       \
+            out->centre[i] = s.c[i];                                                      \
+        out->r2 = s.r2;                                                                   \
+    } while (0)
     if (as_float) {
         float F[3][3];
         for (int k = 0; k < 3; k++)
             for (int i = 0; i < 3; i++)
                 F[k][i] = (float)V[k][i];
-        sc_spheref s;
-        switch (v->kind) {
-        case SC_ACC_CIRCUM:
-            out->status = sc_circumsphere_f(F[0], F[1], F[2], v->method, v->origin, &s);
-            break;
-        case SC_ACC_MINIMAL:
-            out->status = sc_minimal_sphere_f(F[0], F[1], F[2], v->method, v->origin, &s);
-            break;
-        case SC_ACC_PREFILTER_CIRCUM:
-        case SC_ACC_PREFILTER_MINIMAL:
-            out->status = sc_prefilter_sphere_f(F[0], F[1], F[2],
-                v->kind == SC_ACC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL,
-                v->method, &s);
-            break;
-        }
-        for (int i = 0; i < 3; i++)
-            out->centre[i] = s.c[i];
-        out->r2 = s.r2;
+        RUN_KERNEL(f, sc_spheref, F[0], F[1], F[2]);
     } else {
-        sc_sphered s;
-        switch (v->kind) {
-        case SC_ACC_CIRCUM:
-            out->status = sc_circumsphere_d(V[0], V[1], V[2], v->method, v->origin, &s);
-            break;
-        case SC_ACC_MINIMAL:
-            out->status = sc_minimal_sphere_d(V[0], V[1], V[2], v->method, v->origin, &s);
-            break;
-        case SC_ACC_PREFILTER_CIRCUM:
-        case SC_ACC_PREFILTER_MINIMAL:
-            out->status = sc_prefilter_sphere_d(V[0], V[1], V[2],
-                v->kind == SC_ACC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL,
-                v->method, &s);
-            break;
-        }
-        for (int i = 0; i < 3; i++)
-            out->centre[i] = s.c[i];
-        out->r2 = s.r2;
+        RUN_KERNEL(d, sc_sphered, V[0], V[1], V[2]);
     }
+#undef RUN_KERNEL
 
     out->nonfinite = !isfinite(out->r2) || !isfinite(out->centre[0]) ||
                      !isfinite(out->centre[1]) || !isfinite(out->centre[2]);

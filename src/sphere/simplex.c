@@ -24,9 +24,10 @@ const char *sc_simplex_method_name(sc_simplex_method m)
     }
 }
 
-/* Determinant of the m x m matrix a (row stride MAXC), destroyed in place,
- * by Gaussian elimination with partial pivoting. */
-static double det_destroy(double a[][MAXC], int m)
+/* Gaussian elimination with partial pivoting of the m x m matrix a (row
+ * stride MAXC), in place, carrying rhs along when it is not NULL. Returns the
+ * determinant (0 when a pivot vanishes, and then the elimination stops). */
+static double eliminate(double a[][MAXC], double rhs[], int m)
 {
     double det = 1;
     for (int col = 0; col < m; col++) {
@@ -40,6 +41,9 @@ static double det_destroy(double a[][MAXC], int m)
             for (int c = 0; c < m; c++) {
                 double t = a[col][c]; a[col][c] = a[piv][c]; a[piv][c] = t;
             }
+            if (rhs) {
+                double t = rhs[col]; rhs[col] = rhs[piv]; rhs[piv] = t;
+            }
             det = -det;
         }
         det *= a[col][col];
@@ -47,6 +51,8 @@ static double det_destroy(double a[][MAXC], int m)
             double f = a[r][col] / a[col][col];
             for (int c = col + 1; c < m; c++)
                 a[r][c] -= f * a[col][c];
+            if (rhs)
+                rhs[r] -= f * rhs[col];
         }
     }
     return det;
@@ -62,33 +68,15 @@ static void generalized_cross(double out[], const double rows[][MAXC], int m)
             for (int c = 0, cc = 0; c <= m; c++)
                 if (c != j)
                     minor[r][cc++] = rows[r][c];
-        double d = det_destroy(minor, m);
+        double d = eliminate(minor, NULL, m);
         out[j] = (j & 1) ? -d : d;
     }
 }
 
 static int solve_square_lu(double a[][MAXC], double rhs[], double x[], int m)
 {
-    for (int col = 0; col < m; col++) {
-        int piv = col;
-        for (int r = col + 1; r < m; r++)
-            if (fabs(a[r][col]) > fabs(a[piv][col]))
-                piv = r;
-        if (a[piv][col] == 0)
-            return 0;
-        if (piv != col) {
-            for (int c = 0; c < m; c++) {
-                double t = a[col][c]; a[col][c] = a[piv][c]; a[piv][c] = t;
-            }
-            double t = rhs[col]; rhs[col] = rhs[piv]; rhs[piv] = t;
-        }
-        for (int r = col + 1; r < m; r++) {
-            double f = a[r][col] / a[col][col];
-            for (int c = col + 1; c < m; c++)
-                a[r][c] -= f * a[col][c];
-            rhs[r] -= f * rhs[col];
-        }
-    }
+    if (eliminate(a, rhs, m) == 0)
+        return 0;
     for (int r = m - 1; r >= 0; r--) {
         double s = rhs[r];
         for (int c = r + 1; c < m; c++)
