@@ -398,7 +398,9 @@ int sc_cmd_compare(int argc, char **argv)
     if (rc == 0) {
         sc_cmp_print_table(&rows, stdout);
         printf("\nh/m = hit/miss disagreements with the exact oracle, prim = primID outside the tie set,\n"
-               "holes = vertex/edge-aimed rays that cross the surface there but miss it (no hit, or a hit behind it; adversarial rows), xEmbree = speed / "
+               "holes = vertex/edge-aimed rays that pass through the surface (exact transversal crossing) where the tracer\n"
+               "does not stop, grazes = rays whose first exact hit only touches the surface (tangent) and that the tracer\n"
+               "does not report (adversarial rows), xEmbree = speed / "
                "embree (rtcIntersect1/rtcOccluded1) at the same threads;\nsph/ray, rej%%, fp%% (sphere passed, "
                "triangle missed, of the passes) and tri/ray are counted by the prefilter tracers.\n");
     }

@@ -10,6 +10,7 @@
 #include <cjson/cJSON.h>
 
 #include "compare.h"
+#include "crossing.h"
 #include "oracle.h"
 
 #ifdef SC_HAVE_TRACE
@@ -321,12 +322,12 @@ static int wanted(const sc_cmp_options *o, const char *name)
 }
 
 typedef struct accuracy {
-    size_t hit_miss, primid, holes, hole_rays, oracle_rays;
+    size_t hit_miss, primid, holes, hole_rays, grazes_missed, graze_rays, oracle_rays;
     double t_med, t_max;
 } accuracy;
 
 static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *orc, const sc_hitrec *hits,
-                  const uint8_t *occ, accuracy *a)
+                  const uint8_t *occ, int crossing, accuracy *a)
 {
     memset(a, 0, sizeof *a);
     a->oracle_rays = orc->count;
@@ -338,25 +339,29 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
         int hit = occ ? occ[i] != 0 : hits[i].prim != SC_HITREC_MISS;
         uint8_t tag = set->tag[i];
         int edgy = tag == SC_RAY_TAG_VERTEX || tag == SC_RAY_TAG_EDGE || tag == SC_RAY_TAG_EDGE_BACK;
-        /* a hole: the ray passes through the surface at a vertex or edge
-         * (the oracle sees a later hit too) and the tracer sees nothing
-         * there: it misses, or reports a hit clearly behind that point */
-        if (edgy && o->crosses)
-            a->hole_rays++;
+        if (crossing && !occ) {
+            /* A hole: a vertex/edge ray passes THROUGH the surface (exact
+             * transversal crossing, crossing.h) and the tracer does not stop
+             * there. A ray that only touches a silhouette vertex or edge is a
+             * graze: reported apart, whatever its tag. */
+            sc_oracle_verdict v = sc_oracle_judge(orc, s, hits[i].prim, hits[i].t);
+            if (edgy && isfinite(o->cross_t)) {
+                a->hole_rays++;
+                a->holes += v == SC_VERDICT_HOLE;
+            }
+            if (o->hit && o->first_kind == SC_XK_TOUCH) {
+                a->graze_rays++;
+                a->grazes_missed += v == SC_VERDICT_GRAZE_MISSED;
+            }
+        }
         if (hit != o->hit) {
             a->hit_miss++;
-            if (edgy && o->crosses)
-                a->holes++;
             continue;
         }
         if (!hit || occ)
             continue;
-        if (!sc_oracle_accepts(orc, s, hits[i].prim)) {
+        if (!sc_oracle_accepts(orc, s, hits[i].prim))
             a->primid++;
-            /* slipped through the vertex/edge and hit something behind it */
-            if (edgy && o->crosses && (double)hits[i].t > o->t * (1 + 1e-4))
-                a->holes++;
-        }
         double te = o->t != 0 ? fabs(((double)hits[i].t - o->t) / o->t) : fabs((double)hits[i].t);
         if (terr)
             terr[nt++] = te;
@@ -492,7 +497,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         sc_oracle orc;
         double t0 = now_s();
         st = sc_oracle_run(mesh, srays, ns, opt->oracle_threads,
-                           k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_LATER_HIT : 0, &orc);
+                           k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
         if (st != SC_OK) {
             if (err) snprintf(err, errlen, "%s: oracle: %s", scene_name, sc_strerror(st));
             goto done;
@@ -518,7 +523,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
                 goto done;
             }
             accuracy acc;
-            score(set, sample, &orc, hits, shadow ? occ : NULL, &acc);
+            score(set, sample, &orc, hits, shadow ? occ : NULL, k == SC_RAYS_ADVERSARIAL, &acc);
             for (int th = 0; th < opt->nthreads; th++) {
                 double times[64];
                 int reps = opt->repeats < 64 ? opt->repeats : 64;
@@ -551,6 +556,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
                 row->primid_disagree = acc.primid;
                 row->holes = acc.holes;
                 row->hole_rays = acc.hole_rays;
+                row->grazes_missed = acc.grazes_missed;
+                row->graze_rays = acc.graze_rays;
                 row->t_err_median = acc.t_med;
                 row->t_err_max = acc.t_max;
                 row->bytes_per_tri = t->bytes_per_tri;
@@ -598,7 +605,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
     fprintf(f, "scene,triangles,rays,tracer,threads,mrays_per_s,oracle_rays,hit_miss_disagree,"
                "primid_disagree,t_err_max,holes,sphere_tests_per_ray,sphere_reject_rate,"
                "false_positive_rate,tri_tests_per_ray,bytes_per_tri,"
-               "nrays,closed,t_err_median,hole_rays,speed_vs_embree\n");
+               "nrays,closed,t_err_median,hole_rays,speed_vs_embree,grazes_missed,graze_rays\n");
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
         char a[32], b[32], c[32], d[32], e[32], g[32], h[32];
@@ -610,10 +617,10 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
         snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
         snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
-        fprintf(f, "%s,%u,%s,%s,%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s\n", r->scene,
-                r->triangles, sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s,
+        fprintf(f, "%s,%u,%s,%s,%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
+                r->scene, r->triangles, sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s,
                 r->oracle_rays, r->hit_miss_disagree, r->primid_disagree, a, r->holes, b, c, d, e,
-                r->bytes_per_tri, r->nrays, r->closed, g, r->hole_rays, h);
+                r->bytes_per_tri, r->nrays, r->closed, g, r->hole_rays, h, r->grazes_missed, r->graze_rays);
     }
     return ferror(f) ? -1 : 0;
 }
@@ -654,6 +661,8 @@ int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f)
         json_num(o, "t_err_max", r->t_err_max);
         cJSON_AddNumberToObject(o, "holes", (double)r->holes);
         cJSON_AddNumberToObject(o, "hole_rays", (double)r->hole_rays);
+        cJSON_AddNumberToObject(o, "grazes_missed", (double)r->grazes_missed);
+        cJSON_AddNumberToObject(o, "graze_rays", (double)r->graze_rays);
         json_num(o, "sphere_tests_per_ray", r->sphere_tests_per_ray);
         json_num(o, "sphere_reject_rate", r->sphere_reject_rate);
         json_num(o, "false_positive_rate", r->false_positive_rate);
@@ -678,12 +687,12 @@ void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f)
         const sc_cmp_row *r = &rows->rows[i];
         if (strcmp(r->scene, last_scene) != 0) {
             fprintf(f, "\n%s: %u triangles, %s\n", r->scene, r->triangles, r->closed ? "closed" : "open");
-            fprintf(f, "%-11s %-24s %3s %8s %7s %6s %5s %5s %9s %9s %5s %7s %6s %6s %7s %6s\n", "rays",
+            fprintf(f, "%-11s %-24s %3s %8s %7s %6s %5s %5s %9s %9s %5s %6s %7s %6s %6s %7s %6s\n", "rays",
                     "tracer", "thr", "Mrays/s", "xEmbree", "oracle", "h/m", "prim", "t_err_med", "t_err_max",
-                    "holes", "sph/ray", "rej%", "fp%", "tri/ray", "B/tri");
+                    "holes", "grazes", "sph/ray", "rej%", "fp%", "tri/ray", "B/tri");
             last_scene = r->scene;
         }
-        char x[16], tm[16], tx[16], sp[16], rj[16], fp[16], tt[16], ho[24];
+        char x[16], tm[16], tx[16], sp[16], rj[16], fp[16], tt[16], ho[24], gz[24];
         fmt_num(x, sizeof x, "%.2f", r->speed_vs_embree);
         fmt_num(tm, sizeof tm, "%.1e", r->t_err_median);
         fmt_num(tx, sizeof tx, "%.1e", r->t_err_max);
@@ -691,12 +700,15 @@ void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f)
         fmt_num(rj, sizeof rj, "%.1f", 100 * r->sphere_reject_rate);
         fmt_num(fp, sizeof fp, "%.1f", 100 * r->false_positive_rate);
         fmt_num(tt, sizeof tt, "%.2f", r->tri_tests_per_ray);
-        if (r->rays == SC_RAYS_ADVERSARIAL)
+        if (r->rays == SC_RAYS_ADVERSARIAL) {
             snprintf(ho, sizeof ho, "%zu", r->holes);
-        else
+            snprintf(gz, sizeof gz, "%zu", r->grazes_missed);
+        } else {
             snprintf(ho, sizeof ho, "-");
-        fprintf(f, "%-11s %-24s %3d %8.2f %7s %6zu %5zu %5zu %9s %9s %5s %7s %6s %6s %7s %6.0f\n",
+            snprintf(gz, sizeof gz, "-");
+        }
+        fprintf(f, "%-11s %-24s %3d %8.2f %7s %6zu %5zu %5zu %9s %9s %5s %6s %7s %6s %6s %7s %6.0f\n",
                 sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s, x, r->oracle_rays,
-                r->hit_miss_disagree, r->primid_disagree, tm, tx, ho, sp, rj, fp, tt, r->bytes_per_tri);
+                r->hit_miss_disagree, r->primid_disagree, tm, tx, ho, gz, sp, rj, fp, tt, r->bytes_per_tri);
     }
 }

@@ -45,7 +45,9 @@ typedef struct sc_cmp_row {
     double mrays_per_s;
     double speed_vs_embree;             /* mrays / embree's at the same threads; NaN if none */
     size_t oracle_rays;
-    size_t hit_miss_disagree, primid_disagree, holes, hole_rays;
+    size_t hit_miss_disagree, primid_disagree;
+    size_t holes, hole_rays;            /* vertex/edge rays that cross the surface: missed / all */
+    size_t grazes_missed, graze_rays;   /* rays whose first hit only touches the surface: unreported / all */
     double t_err_median, t_err_max;
     double sphere_tests_per_ray, sphere_reject_rate, false_positive_rate, tri_tests_per_ray;
     double bytes_per_tri;

@@ -7,6 +7,7 @@
 
 #include <mpfr.h>
 
+#include "crossing.h"
 #include "oracle.h"
 #include "sc_ref_ray.h"
 
@@ -234,8 +235,10 @@ static void *run_job(void *arg)
 {
     job *j = arg;
     const oracle_mesh *m = j->m;
-    size_t cap = 256, nc = 0;
+    size_t cap = 256, nc = 0, xcap = 0;
     cand *cs = malloc(cap * sizeof *cs);
+    float (*xt)[9] = NULL;                 /* SC_ORACLE_CROSSING: candidates as floats */
+    uint32_t *xid = NULL;
     mpfr_t best, t;
     mpfr_init2(best, 256);
     mpfr_init2(t, 256);
@@ -310,6 +313,49 @@ static void *run_job(void *arg)
                     later = 1;
             }
         h->crosses = have && later;
+        h->cross_t = INFINITY;
+        if (j->flags & SC_ORACLE_CROSSING) {
+            if (nc > xcap) {
+                float (*nxt)[9] = realloc(xt, nc * sizeof *xt);
+                if (nxt)
+                    xt = nxt;
+                uint32_t *nxid = realloc(xid, nc * sizeof *xid);
+                if (nxid)
+                    xid = nxid;
+                if (!nxt || !nxid) {
+                    j->failed = 1;
+                    goto out;
+                }
+                xcap = nc;
+            }
+            for (size_t q2 = 0; q2 < nc; q2++) {
+                for (int c = 0; c < 9; c++)
+                    xt[q2][c] = (float)m->v[cs[q2].k][c];   /* exact: the mesh is float */
+                xid[q2] = m->id[cs[q2].k];
+            }
+            sc_xresult x;
+            j->exact_calls += nc;
+            if (sc_x_classify(r, (const float (*)[9])xt, xid, nc, &x) != SC_OK) {
+                j->failed = 1;
+                goto out;
+            }
+            h->coplanar = (uint32_t)x.coplanar;
+            h->first_kind = x.ngroups ? (int)x.groups[0].kind : SC_XK_NONE;
+            size_t fc = sc_xresult_first_cross(&x);
+            if (fc < x.ngroups) {
+                const sc_xgroup *g = &x.groups[fc];
+                h->cross_t = g->t;
+                h->cross_tie_count = g->count;
+                uint32_t nt = g->count < SC_ORACLE_MAX_TIES ? g->count : SC_ORACLE_MAX_TIES;
+                for (uint32_t a = 0; a < nt; a++) {       /* ascending, like ties */
+                    uint32_t b = a, id = g->tri[a];
+                    for (; b > 0 && h->cross_ties[b - 1] > id; b--)
+                        h->cross_ties[b] = h->cross_ties[b - 1];
+                    h->cross_ties[b] = id;
+                }
+            }
+            sc_xresult_free(&x);
+        }
         if (have) {
             h->hit = 1;
             h->t = mpfr_get_d(best, MPFR_RNDN);
@@ -323,6 +369,8 @@ static void *run_job(void *arg)
     }
 out:
     free(cs);
+    free(xt);
+    free(xid);
     mpfr_clear(best);
     mpfr_clear(t);
     mpfr_free_cache();
@@ -335,7 +383,7 @@ sc_status sc_oracle_run(const sc_mesh_view *mesh, const sc_ray *rays, size_t n, 
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    if ((n && !rays) || threads < 1 || threads > 256 || (flags & ~SC_ORACLE_LATER_HIT))
+    if ((n && !rays) || threads < 1 || threads > 256 || (flags & ~(SC_ORACLE_LATER_HIT | SC_ORACLE_CROSSING)))
         return SC_ERR_INVALID_ARGUMENT;
     sc_status st = sc_mesh_view_check(mesh);
     if (st != SC_OK)
@@ -399,4 +447,39 @@ int sc_oracle_accepts(const sc_oracle *o, size_t i, uint32_t prim)
         if (h->ties[k] == prim)
             return 1;
     return h->tie_count > SC_ORACLE_MAX_TIES;
+}
+
+static int in_set(const uint32_t *set, uint32_t count, uint32_t prim)
+{
+    uint32_t n = count < SC_ORACLE_MAX_TIES ? count : SC_ORACLE_MAX_TIES;
+    for (uint32_t k = 0; k < n; k++)
+        if (set[k] == prim)
+            return 1;
+    return count > SC_ORACLE_MAX_TIES;
+}
+
+/* Slack for "at or before" an exact event: far above a float tracer's t error
+ * (a few ulps times the conditioning of the hit), far below the gap to the
+ * next surface on any mesh here. */
+#define JUDGE_REL 1e-4
+
+sc_oracle_verdict sc_oracle_judge(const sc_oracle *o, size_t i, uint32_t prim, float t)
+{
+    if (!o || i >= o->count)
+        return SC_VERDICT_OK;
+    const sc_oracle_hit *h = &o->hits[i];
+    int hit = prim != SC_HITREC_MISS;
+    if (isfinite(h->cross_t)) {
+        int stopped = hit && (in_set(h->cross_ties, h->cross_tie_count, prim) ||
+                              in_set(h->ties, h->tie_count, prim) ||
+                              (double)t <= h->cross_t + JUDGE_REL * fabs(h->cross_t));
+        if (!stopped)
+            return SC_VERDICT_HOLE;
+    }
+    if (h->hit && h->first_kind == SC_XK_TOUCH) {
+        int seen = hit && (in_set(h->ties, h->tie_count, prim) || (double)t <= h->t + JUDGE_REL * fabs(h->t));
+        if (!seen)
+            return SC_VERDICT_GRAZE_MISSED;
+    }
+    return SC_VERDICT_OK;
 }

@@ -27,10 +27,17 @@ typedef struct sc_oracle_hit {
     int hit;                 /* 1 iff some triangle is hit in [tmin, tmax] */
     double t;                /* exact first-hit t rounded to double; +inf on a miss */
     int crosses;             /* with SC_ORACLE_LATER_HIT: some triangle is also hit
-                                beyond t, so the ray passes through the surface
-                                rather than touching it at one point */
+                                beyond t. A cheap hint only: a ray that touches a
+                                silhouette and goes on to hit something else has
+                                it too. SC_ORACLE_CROSSING tells them apart. */
     uint32_t tie_count;      /* triangles at exactly that t (>= 1 on a hit) */
     uint32_t ties[SC_ORACLE_MAX_TIES];   /* ascending; the first SC_ORACLE_MAX_TIES */
+    /* With SC_ORACLE_CROSSING (exact, see crossing.h): */
+    int first_kind;          /* sc_xkind of the first hit: cross, touch or ambiguous */
+    double cross_t;          /* first transversal crossing, exact t rounded; +inf if none */
+    uint32_t cross_tie_count;                 /* triangles at cross_t */
+    uint32_t cross_ties[SC_ORACLE_MAX_TIES];  /* ascending; the first SC_ORACLE_MAX_TIES */
+    uint32_t coplanar;       /* candidate triangles whose plane contains the line */
 } sc_oracle_hit;
 
 typedef struct sc_oracle {
@@ -40,11 +47,12 @@ typedef struct sc_oracle {
     uint64_t exact_calls;    /* MPFR decisions made */
 } sc_oracle;
 
-enum { SC_ORACLE_LATER_HIT = 1 };
+enum { SC_ORACLE_LATER_HIT = 1, SC_ORACLE_CROSSING = 2 };
 
-/* threads >= 1; flags 0 or SC_ORACLE_LATER_HIT (also fill `crosses`, at the
- * cost of more exact decisions). SC_ERR_INVALID_ARGUMENT for a bad mesh or
- * arguments. */
+/* threads >= 1; flags: any of SC_ORACLE_LATER_HIT (also fill `crosses`) and
+ * SC_ORACLE_CROSSING (also fill first_kind, cross_t, cross_ties: every
+ * candidate is decided exactly, with the symbolic perturbation of
+ * crossing.h). SC_ERR_INVALID_ARGUMENT for a bad mesh or arguments. */
 sc_status sc_oracle_run(const sc_mesh_view *mesh, const sc_ray *rays, size_t n, int threads,
                         int flags, sc_oracle *out);
 void sc_oracle_free(sc_oracle *o);
@@ -53,5 +61,21 @@ void sc_oracle_free(sc_oracle *o);
  * might be among the unrecorded ties: then any prim the tracer reports at the
  * tied t is accepted). */
 int sc_oracle_accepts(const sc_oracle *o, size_t i, uint32_t prim);
+
+/* How a tracer's closest hit on ray i relates to the surface (needs
+ * SC_ORACLE_CROSSING). A hit counts as "at" an exact event if its triangle is
+ * in that event's tie set or its t is at most 1e-4 (relative) beyond it. */
+typedef enum sc_oracle_verdict {
+    SC_VERDICT_OK = 0,
+    SC_VERDICT_HOLE,          /* the ray passes through the surface (a transversal
+                                 crossing at cross_t) and the tracer misses, or
+                                 reports something behind the crossing */
+    SC_VERDICT_GRAZE_MISSED   /* the first exact hit is a tangential touch and the
+                                 tracer does not report it (it misses, or stops at
+                                 a later surface); no float test can promise it */
+} sc_oracle_verdict;
+
+/* prim == SC_HITREC_MISS for a miss. A hole takes precedence. */
+sc_oracle_verdict sc_oracle_judge(const sc_oracle *o, size_t i, uint32_t prim, float t);
 
 #endif
