@@ -2,8 +2,14 @@
  * the scalar specification and the exact references:
  *  - batch spheres: every method x kind, float and double, random and hard
  *    families; bit-identical to the specification without FMA, centre error
- *    within a stated bound of the specification's with FMA; zero containment
- *    failures (sc_ref_contains, exact) for the conservative kinds;
+ *    within a stated bound of the specification's with FMA (the conservative
+ *    kinds included); zero containment failures (sc_ref_contains, exact) and
+ *    a stated bound on how far r2 exceeds the reference sphere's for the
+ *    conservative kinds;
+ *  - the conservative kinds' fast path bit-identical to the general path,
+ *    lane by lane, on batches that mix every family, and a lane's result
+ *    independent of its neighbours; streaming stores and vertex prefetch
+ *    (large batches) bit-identical to plain stores;
  *  - tails and bad indices with guard pages;
  *  - reject masks (blocks 4/8/16, packets 8/16) bit-identical to
  *    sc_ray_sphere_reject, and zero false rejects against the exact
@@ -25,6 +31,7 @@
 #include "sc_families.h"
 #include "sc_ref_ray.h"
 #include "sc_reference.h"
+#include "simd/sc_kernels.h"
 #include "spherecull/sc_simd.h"
 
 static sc_isa g_isa;
@@ -121,6 +128,20 @@ static int same_bits_d(double a, double b) { return memcmp(&a, &b, sizeof a) == 
 #define FMA_FLOOR_U 64.0
 #define FMA_COND_U 16.0
 
+/* Stated bound on the conservative kinds' r2 (what the padding may cost):
+ * with e the centre error above and r_ref the reference radius, every
+ * vertex is within r_ref (1 + e) of the computed centre, so
+ *   r2 <= r_ref^2 (1 + e)^2 (1 + 32 u) + 16 denorm_min
+ * (the padding (1 + 8u) and the rounding of |V - c|^2 take about 15u). */
+static int r2_within_bound(const sc_ref_sphere *ref, const double c[3], double r2, double u, double tiny)
+{
+    double r2_ref = mpfr_get_d(ref->r2, MPFR_RNDU);
+    if (!(r2_ref > 0))
+        return 1;
+    double e = sc_ref_centre_error(ref, c);
+    return r2 <= r2_ref * (1 + e) * (1 + e) * (1 + 32 * u) + 16 * tiny;
+}
+
 static void check_family_f(sc_family fam, int method, int kind, float (*V)[3][3], size_t n,
                            sc_ref_sphere *ref_c, int *ref_c_ok, sc_ref_sphere *ref_m, int *ref_m_ok,
                            size_t *identical, size_t *contain_fail, size_t *bound_fail, double *worst_ratio)
@@ -145,9 +166,16 @@ static void check_family_f(sc_family fam, int method, int kind, float (*V)[3][3]
                 if (finite && !sc_ref_contains(v, cd, r2))
                     ++*contain_fail;
             }
-        } else if (!same) {
-            const sc_ref_sphere *ref = kind == SC_BATCH_CIRCUM ? &ref_c[i] : &ref_m[i];
-            int ok = kind == SC_BATCH_CIRCUM ? ref_c_ok[i] : ref_m_ok[i];
+            const sc_ref_sphere *ref = kind == SC_BATCH_PREFILTER_CIRCUM ? &ref_c[i] : &ref_m[i];
+            int ok = kind == SC_BATCH_PREFILTER_CIRCUM ? ref_c_ok[i] : ref_m_ok[i];
+            if (ok && isfinite(r2) && !r2_within_bound(ref, cd, r2, u, FLT_TRUE_MIN) && ++*bound_fail <= 5)
+                print_message("r2 bound: %s %s %s tri %zu: r2 %a\n", sc_family_name(fam),
+                              sc_method_name((sc_method)method), spec_kind_name[kind], i, r2);
+        }
+        if (!same) {
+            int circ = kind == SC_BATCH_CIRCUM || kind == SC_BATCH_PREFILTER_CIRCUM;
+            const sc_ref_sphere *ref = circ ? &ref_c[i] : &ref_m[i];
+            int ok = circ ? ref_c_ok[i] : ref_m_ok[i];
             if (!ok || !isfinite(s.r2) || !isfinite(r2))
                 continue;          /* failure lanes: compared via the prefilter kinds */
             double cd[3] = { c[0], c[1], c[2] }, sd[3] = { s.c[0], s.c[1], s.c[2] };
@@ -242,13 +270,20 @@ static void test_batch_double(void **state)
                                same_bits_d(c[2], s.c[2]) && same_bits_d(r2, s.r2);
                     identical += (size_t)same;
                     total++;
+                    int circ = k == SC_BATCH_CIRCUM || k == SC_BATCH_PREFILTER_CIRCUM;
                     if (k >= SC_BATCH_PREFILTER_CIRCUM) {
                         for (int v = 0; v < 3; v++)
                             if (isfinite(V[i][v][0]) && isfinite(V[i][v][1]) && isfinite(V[i][v][2]) &&
                                 !sc_ref_contains(V[i][v], c, r2))
                                 contain_fail++;
-                    } else if (!same && isfinite(s.r2) && isfinite(r2) && k == SC_BATCH_CIRCUM &&
-                               sc_ref_circumsphere(V[i][0], V[i][1], V[i][2], &ref)) {
+                        int rok = circ ? sc_ref_circumsphere(V[i][0], V[i][1], V[i][2], &ref)
+                                       : sc_ref_minimal_sphere(V[i][0], V[i][1], V[i][2], &ref);
+                        if (rok && isfinite(r2) && !r2_within_bound(&ref, c, r2, u, DBL_TRUE_MIN))
+                            bound_fail++;
+                    }
+                    if (!same && isfinite(s.r2) && isfinite(r2) && (circ || k == SC_BATCH_PREFILTER_MINIMAL) &&
+                        (circ ? sc_ref_circumsphere(V[i][0], V[i][1], V[i][2], &ref)
+                              : sc_ref_minimal_sphere(V[i][0], V[i][1], V[i][2], &ref))) {
                         double e = sc_ref_centre_error(&ref, c), es = sc_ref_centre_error(&ref, s.c);
                         if (!(e <= FMA_FACTOR * es + FMA_FLOOR_U * u +
                                    FMA_COND_U * u * sc_ref_condition(V[i][0], V[i][1], V[i][2])))
@@ -263,6 +298,157 @@ static void test_batch_double(void **state)
     free(V), free(out), free(idx);
     assert_int_equal(contain_fail, 0);
     assert_int_equal(bound_fail, 0);
+}
+
+/* ---- fast path against the general path --------------------------------- */
+
+/* Runs the active level's kernel on SoA copies of V (float or double). */
+static void kernel_f(const sc_kernels *k, float (*V)[3][3], size_t n, int method, int kind, unsigned flags,
+                     float *out, size_t pad)
+{
+    float *in = malloc(sizeof(float) * 9 * (n ? n : 1));
+    sc_tri_source_f src;
+    memset(&src, 0, sizeof src);
+    for (int v = 0; v < 3; v++)
+        for (int a = 0; a < 3; a++) {
+            float *col = in + (size_t)(3 * v + a) * n;
+            for (size_t i = 0; i < n; i++)
+                col[i] = V[i][v][a];
+            src.soa[v][a] = col;
+        }
+    sc_spheres_soaf o = { out, out + pad, out + 2 * pad, out + 3 * pad };
+    k->spheres_f(&src, n, method, kind, flags, &o);
+    free(in);
+}
+
+static void kernel_d(const sc_kernels *k, double (*V)[3][3], size_t n, int method, int kind, unsigned flags,
+                     double *out, size_t pad)
+{
+    double *in = malloc(sizeof(double) * 9 * (n ? n : 1));
+    sc_tri_source_d src;
+    memset(&src, 0, sizeof src);
+    for (int v = 0; v < 3; v++)
+        for (int a = 0; a < 3; a++) {
+            double *col = in + (size_t)(3 * v + a) * n;
+            for (size_t i = 0; i < n; i++)
+                col[i] = V[i][v][a];
+            src.soa[v][a] = col;
+        }
+    sc_spheres_soad o = { out, out + pad, out + 2 * pad, out + 3 * pad };
+    k->spheres_d(&src, n, method, kind, flags, &o);
+    free(in);
+}
+
+/* Every family interleaved, so most vectors hold fast and general lanes
+ * together: the fast path must give, lane by lane, the general path's bits
+ * (SC_KFLAG_GENERAL), and each lane the bits it gets alone in a batch of
+ * one (a lane never depends on its neighbours). */
+static void test_fast_path_matches_general(void **state)
+{
+    (void)state;
+    NEED_ISA();
+    const sc_kernels *k = sc_kernels_for(g_isa);
+    enum { PER = 120, N = PER * SC_FAM_COUNT };
+    size_t pad = sc_simd_padded(N);
+    sc_rng rng;
+    sc_rng_seed(&rng, 31337);
+    float (*Vf)[3][3] = malloc(sizeof(float) * 9 * N);
+    double (*Vd)[3][3] = malloc(sizeof(double) * 9 * N);
+    for (int i = 0; i < N; i++) {
+        sc_family_triangle((sc_family)(i % SC_FAM_COUNT), &rng, 1, Vd[i]);
+        for (int v = 0; v < 3; v++)
+            for (int a = 0; a < 3; a++)
+                Vf[i][v][a] = (float)Vd[i][v][a];
+    }
+    float *f1 = malloc(sizeof(float) * 4 * pad), *f2 = malloc(sizeof(float) * 4 * pad), f3[64];
+    double *d1 = malloc(sizeof(double) * 4 * pad), *d2 = malloc(sizeof(double) * 4 * pad), d3[64];
+    size_t lanes = 0, differ = 0, alone_differ = 0;
+    for (int m = 0; m < SC_METHOD_COUNT; m++)
+        for (int kind = SC_BATCH_PREFILTER_CIRCUM; kind <= SC_BATCH_PREFILTER_MINIMAL; kind++) {
+            kernel_f(k, Vf, N, m, kind, 0, f1, pad);
+            kernel_f(k, Vf, N, m, kind, SC_KFLAG_GENERAL, f2, pad);
+            kernel_d(k, Vd, N, m, kind, 0, d1, pad);
+            kernel_d(k, Vd, N, m, kind, SC_KFLAG_GENERAL, d2, pad);
+            for (size_t i = 0; i < N; i++) {
+                for (int j = 0; j < 4; j++) {
+                    differ += !same_bits_f(f1[j * pad + i], f2[j * pad + i]);
+                    differ += !same_bits_d(d1[j * pad + i], d2[j * pad + i]);
+                }
+                lanes += 2;
+                if (i % 7 == 0) {
+                    kernel_f(k, &Vf[i], 1, m, kind, 0, f3, 16);
+                    kernel_d(k, &Vd[i], 1, m, kind, 0, d3, 16);
+                    for (int j = 0; j < 4; j++) {
+                        alone_differ += !same_bits_f(f1[j * pad + i], f3[j * 16]);
+                        alone_differ += !same_bits_d(d1[j * pad + i], d3[j * 16]);
+                    }
+                }
+            }
+        }
+    print_message("%zu conservative spheres (mixed families): %zu values differ from the general path, "
+                  "%zu from the same triangle alone\n", lanes, differ, alone_differ);
+    free(Vf), free(Vd), free(f1), free(f2), free(d1), free(d2);
+    assert_int_equal(differ, 0);
+    assert_int_equal(alone_differ, 0);
+}
+
+/* Past SC_STREAM_MIN_COUNT the kernels stream their stores (aligned output)
+ * and prefetch vertices (indexed input): same bits as plain stores, as an
+ * unaligned output (which cannot stream), and as the SoA input. */
+static void test_streaming_large_batch(void **state)
+{
+    (void)state;
+    NEED_ISA();
+    const sc_kernels *k = sc_kernels_for(g_isa);
+    const size_t n = SC_STREAM_MIN_COUNT + 21, pad = sc_simd_padded(n);
+    sc_rng rng;
+    sc_rng_seed(&rng, 8);
+    float *verts = malloc(sizeof(float) * 9 * n), *soa = malloc(sizeof(float) * 9 * n);
+    uint32_t *idx = malloc(sizeof(uint32_t) * 3 * n);
+    for (size_t i = 0; i < 3 * n; i++)
+        idx[i] = (uint32_t)i;
+    for (size_t i = n; i-- > 1;) {            /* shuffled triangle order */
+        size_t j = (size_t)(sc_rng_next(&rng) % (i + 1));
+        for (int v = 0; v < 3; v++) {
+            uint32_t t = idx[3 * i + (size_t)v];
+            idx[3 * i + (size_t)v] = idx[3 * j + (size_t)v], idx[3 * j + (size_t)v] = t;
+        }
+    }
+    for (size_t i = 0; i < n; i++) {
+        double V[3][3];
+        sc_family_triangle(i % 97 ? SC_FAM_RANDOM : (sc_family)(i % SC_FAM_COUNT), &rng, 1, V);
+        for (int v = 0; v < 3; v++)
+            for (int a = 0; a < 3; a++)
+                verts[9 * i + 3 * (size_t)v + (size_t)a] = (float)V[v][a];
+    }
+    sc_tri_source_f s_soa, s_idx;
+    memset(&s_soa, 0, sizeof s_soa);
+    for (int v = 0; v < 3; v++)
+        for (int a = 0; a < 3; a++) {
+            for (size_t i = 0; i < n; i++)
+                soa[(size_t)(3 * v + a) * n + i] = verts[3 * idx[3 * i + (size_t)v] + (size_t)a];
+            s_soa.soa[v][a] = soa + (size_t)(3 * v + a) * n;
+        }
+    s_idx = (sc_tri_source_f){ verts, 3 * n, idx, { { 0 } } };
+    float *a = aligned_alloc(64, sizeof(float) * 4 * pad), *b = aligned_alloc(64, sizeof(float) * 4 * pad);
+    float *c = aligned_alloc(64, sizeof(float) * (4 * pad + 16)), *d = aligned_alloc(64, sizeof(float) * 4 * pad);
+    size_t mismatches = 0;
+    for (int kind = 0; kind < SC_BATCH_KIND_COUNT; kind++) {
+        sc_spheres_soaf oa = { a, a + pad, a + 2 * pad, a + 3 * pad }, ob = { b, b + pad, b + 2 * pad, b + 3 * pad };
+        sc_spheres_soaf oc = { c + 1, c + 1 + pad, c + 1 + 2 * pad, c + 1 + 3 * pad };   /* misaligned */
+        sc_spheres_soaf od = { d, d + pad, d + 2 * pad, d + 3 * pad };
+        assert_int_equal(k->spheres_f(&s_soa, n, SC_METHOD_TEXTBOOK, kind, 0, &oa), 0);
+        assert_int_equal(k->spheres_f(&s_soa, n, SC_METHOD_TEXTBOOK, kind, SC_KFLAG_NO_STREAM, &ob), 0);
+        assert_int_equal(k->spheres_f(&s_soa, n, SC_METHOD_TEXTBOOK, kind, 0, &oc), 0);
+        assert_int_equal(k->spheres_f(&s_idx, n, SC_METHOD_TEXTBOOK, kind, 0, &od), 0);
+        mismatches += memcmp(a, b, sizeof(float) * 4 * pad) != 0;
+        mismatches += memcmp(a, c + 1, sizeof(float) * 4 * pad) != 0;
+        mismatches += memcmp(a, d, sizeof(float) * 4 * pad) != 0;
+        for (size_t i = n; i < pad; i++)
+            mismatches += !(a[3 * pad + i] == -1 && a[i] == 0);
+    }
+    free(verts), free(soa), free(idx), free(a), free(b), free(c), free(d);
+    assert_int_equal(mismatches, 0);
 }
 
 /* ---- tails, guard pages, bad input -------------------------------------- */
@@ -610,6 +796,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_tails_guard_pages),
         cmocka_unit_test(test_batch_float),
         cmocka_unit_test(test_batch_double),
+        cmocka_unit_test(test_fast_path_matches_general),
+        cmocka_unit_test(test_streaming_large_batch),
         cmocka_unit_test(test_no_false_rejects),
     };
     int failed = cmocka_run_group_tests_name(sc_isa_name(g_isa), tests, NULL, NULL);

@@ -23,7 +23,7 @@ static const char *CMD = "bench-spheres";
 typedef struct row {
     int method, kind, isa, dbl;
     const char *ws;          /* L1 | L2 | DRAM */
-    const char *source;      /* soa | indexed | soa-noprescale */
+    const char *source;      /* soa | indexed | soa-general | soa-noprescale | soa-nostream */
     double mtri, ns, copy_ratio, err_med, err_max;
 } row;
 
@@ -76,10 +76,12 @@ static void run_job(const job *j)
         j->k->spheres_f(&j->sf, j->count, j->method, j->kind, j->flags, &j->of);
 }
 
-/* Median seconds per call over `reps` samples, each at least min_time long. */
+/* Seconds per call: the best of `reps` samples, each at least min_time
+ * long (the machine is shared; the fastest sample is the one least
+ * disturbed by other work). */
 static double time_job(const job *j, int reps, double min_time)
 {
-    double t[16];
+    double best = INFINITY;
     run_job(j);                                     /* warm caches and pages */
     for (int r = 0; r < reps; r++) {
         int calls = 0;
@@ -89,9 +91,48 @@ static double time_job(const job *j, int reps, double min_time)
             calls++;
             el = now() - t0;
         } while (el < min_time);
-        t[r] = el / calls;
+        best = fmin(best, el / calls);
     }
-    return median(t, reps);
+    return best;
+}
+
+/* DRAM rows: the copy and the kernel alternate, so that both see the same
+ * memory traffic from the rest of the machine; best of each. */
+static void time_pair(const job *kernel, const job *copy, int reps, double *tk, double *tc)
+{
+    *tk = *tc = INFINITY;
+    run_job(kernel);
+    for (int r = 0; r < reps; r++) {
+        double t0 = now();
+        run_job(copy);
+        double t1 = now();
+        run_job(kernel);
+        double t2 = now();
+        *tc = fmin(*tc, t1 - t0), *tk = fmin(*tk, t2 - t1);
+    }
+}
+
+/* The memory ceiling of the indexed input: the same 9 coordinates per
+ * triangle copied through the same shuffled index buffer into SoA arrays,
+ * with the kernels' prefetch distance. */
+static double time_indexed_copy(const float *verts, const uint32_t *idx, float *dst, size_t n, int reps)
+{
+    double best = INFINITY;
+    for (int r = 0; r < reps; r++) {
+        double t0 = now();
+        for (size_t t = 0; t < n; t++) {
+            if (t + SC_PREFETCH_AHEAD < n)
+                for (int k = 0; k < 3; k++)
+                    __builtin_prefetch(verts + 3 * (size_t)idx[3 * (t + SC_PREFETCH_AHEAD) + (size_t)k]);
+            for (int k = 0; k < 3; k++) {
+                const float *p = verts + 3 * (size_t)idx[3 * t + (size_t)k];
+                for (int a = 0; a < 3; a++)
+                    dst[(size_t)(3 * k + a) * n + t] = p[a];
+            }
+        }
+        best = fmin(best, now() - t0);
+    }
+    return best;
 }
 
 static void add_row(bench *b, row r)
@@ -462,7 +503,11 @@ int sc_cmd_bench_spheres(int argc, char **argv)
     for (int i = 0; i < SC_ISA_COUNT; i++)
         if (sc_isa_supported((sc_isa)i))
             printf(" %s", sc_isa_name((sc_isa)i));
-    printf("\nthreads: 1; timing: median of %d repeats\n\n", quick ? 3 : 5);
+    printf("\nthreads: 1; timing: best of %d repeats (DRAM: copy and kernel alternate, best of each)\n"
+           "sources: soa = SoA input (fast path for the prefilter kinds); soa-general = the general path only\n"
+           "  (the kernels before the fast path); soa-noprescale = general path without prescaling;\n"
+           "  soa-nostream = no streaming stores; indexed = vertex buffer + shuffled index buffer\n\n",
+           quick ? 3 : 5);
 
     int isas[SC_ISA_COUNT], nisa = 0;
     for (int i = 0; i < SC_ISA_COUNT; i++)
@@ -476,6 +521,7 @@ int sc_cmd_bench_spheres(int argc, char **argv)
     errset es;
     make_errset(&es, quick ? 60 : 200);
 
+    double idx_copy_ns = NAN;
     static const struct { const char *name; size_t n; } sets[3] = {
         { "L1", 256 }, { "L2", 8192 }, { "DRAM", 10000000 },
     };
@@ -490,6 +536,12 @@ int sc_cmd_bench_spheres(int argc, char **argv)
             sc_cli_error(CMD, "out of memory for %zu triangles", n);
             return 1;
         }
+        if (dram) {
+            double ti = time_indexed_copy(ds.vf, ds.idx, (float *)ds.copy_dst, n, reps);
+            idx_copy_ns = ti / (double)n * 1e9;
+            printf("DRAM float copy through the shuffled index buffer: %.2f ns/triangle (%.2f GB/s of 64 B/tri)\n",
+                   idx_copy_ns, batch_bytes(n, 0, 1) / ti / 1e9);
+        }
         for (int dbl = 0; dbl < 2; dbl++) {
             job cj = make_job(&ds, NULL, dbl, 0, 0, 0);
             cj.copy_src = dbl ? (void *)ds.d : (void *)ds.f;
@@ -497,8 +549,8 @@ int sc_cmd_bench_spheres(int argc, char **argv)
             cj.copy_bytes = (size_t)(batch_bytes(n, dbl, 0) / 2);
             double tc = time_job(&cj, reps, min_time);
             double copy_bw = 2.0 * (double)cj.copy_bytes / tc;
-            printf("%-4s %-6s memcpy of %.3g MB: %.2f GB/s (read + write)\n", sets[s].name, dbl ? "double" : "float",
-                   (double)cj.copy_bytes / 1e6, copy_bw / 1e9);
+            printf("%-4s %-6s memcpy of %.3g MB: %.2f GB/s (read + write)%s\n", sets[s].name, dbl ? "double" : "float",
+                   (double)cj.copy_bytes / 1e6, copy_bw / 1e9, dram ? "; rows re-measure it paired" : "");
             for (int ii = 0; ii < nisa; ii++) {
                 const sc_kernels *k = sc_kernels_for((sc_isa)isas[ii]);
                 for (int m = 0; m < SC_METHOD_COUNT; m++)
@@ -506,19 +558,32 @@ int sc_cmd_bench_spheres(int argc, char **argv)
                         /* DRAM: the prefilter kinds only (what a tracer builds); double textbook only. */
                         if (dram && (kind < SC_BATCH_PREFILTER_CIRCUM || (dbl && m != SC_METHOD_TEXTBOOK)))
                             continue;
-                        for (int src = 0; src < (dbl ? 1 : 3); src++) {
-                            if (src > 0 && (m != SC_METHOD_TEXTBOOK || kind != SC_BATCH_PREFILTER_MINIMAL))
+                        static const char *const src_name[5] = { "soa", "indexed", "soa-general",
+                                                                 "soa-noprescale", "soa-nostream" };
+                        for (int src = 0; src < 5; src++) {
+                            int tb = m == SC_METHOD_TEXTBOOK;
+                            if (src > 0 && !(tb && (kind == SC_BATCH_PREFILTER_MINIMAL ||
+                                                    (src == 2 && kind == SC_BATCH_PREFILTER_CIRCUM))))
                                 continue;
-                            if (src == 2 && isas[ii] == SC_ISA_SCALAR)
-                                continue;    /* the scalar level always prescales */
+                            if (src > 0 && isas[ii] == SC_ISA_SCALAR && src != 1)
+                                continue;    /* the scalar level has one path and always prescales */
+                            if ((src == 1 && dbl) || (src == 4 && !dram))
+                                continue;
                             job j = make_job(&ds, k, dbl, m, kind, src == 1);
-                            if (src == 2)
-                                j.flags = SC_KFLAG_NO_PRESCALE;
-                            double t = time_job(&j, dram ? (quick ? 3 : 3) : reps, dram ? 0 : min_time);
-                            row r = { m, kind, isas[ii], dbl, sets[s].name,
-                                      src == 0 ? "soa" : src == 1 ? "indexed" : "soa-noprescale",
+                            j.flags = src == 2 ? SC_KFLAG_GENERAL
+                                    : src == 3 ? SC_KFLAG_GENERAL | SC_KFLAG_NO_PRESCALE
+                                    : src == 4 ? SC_KFLAG_NO_STREAM : 0;
+                            double t, bw = copy_bw;
+                            if (dram) {
+                                double tcp;
+                                time_pair(&j, &cj, quick ? 3 : 5, &t, &tcp);
+                                bw = 2.0 * (double)cj.copy_bytes / tcp;
+                            } else {
+                                t = time_job(&j, reps, min_time);
+                            }
+                            row r = { m, kind, isas[ii], dbl, sets[s].name, src_name[src],
                                       (double)n / t / 1e6, t / (double)n * 1e9,
-                                      batch_bytes(n, dbl, src == 1) / t / copy_bw, 0, 0 };
+                                      batch_bytes(n, dbl, src == 1) / t / bw, 0, 0 };
                             const row *prev = find(&b, m, kind, isas[ii], dbl, "L1", "soa");
                             if (prev && src == 0) {
                                 r.err_med = prev->err_med, r.err_max = prev->err_max;
@@ -563,10 +628,33 @@ int sc_cmd_bench_spheres(int argc, char **argv)
                    sc_isa_name((sc_isa)isas[ii]), pl->mtri / tb->mtri, pr->mtri / tb->mtri);
     }
 
+    printf("\nDRAM copy ratios (kernel bytes/s over memcpy's, paired; target >= 0.8), textbook, float:\n");
+    for (int ii = 0; ii < nisa; ii++)
+        for (int kind = SC_BATCH_PREFILTER_CIRCUM; kind <= SC_BATCH_PREFILTER_MINIMAL; kind++) {
+            const row *f = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "soa");
+            const row *g = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "soa-general");
+            const row *x = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "indexed");
+            if (!f)
+                continue;
+            printf("  %-7s %-17s %.2f (%s)", sc_isa_name((sc_isa)isas[ii]), sc_batch_kind_name((sc_batch_kind)kind),
+                   f->copy_ratio, f->copy_ratio >= 0.8 ? "met" : "NOT met");
+            if (g)
+                printf("; general path %.2f", g->copy_ratio);
+            if (x)
+                printf("; indexed %.3f", x->copy_ratio);
+            printf("\n");
+        }
+    const row *bi = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "indexed");
+    if (bi)
+        printf("  indexed, %s: %.2f ns/triangle, %.2fx the time of a plain copy of the same vertices through the\n"
+               "  same shuffled index buffer (%.2f ns/triangle): bound by the random vertex reads, not by memcpy\n",
+               sc_isa_name((sc_isa)best), bi->ns, bi->ns / idx_copy_ns, idx_copy_ns);
+
     const row *base = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, SC_ISA_SCALAR, 0, "L1", "soa");
     const row *base_c = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_CIRCUM, SC_ISA_SCALAR, 0, "L1", "soa");
     const row *top = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa");
     const row *nops = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa-noprescale");
+    const row *gen = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa-general");
     const row *dr = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "soa");
     const row *dri = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "indexed");
     printf("\ntargets (%s, textbook, prefilter-minimal, float):\n", sc_isa_name((sc_isa)best));
@@ -577,9 +665,12 @@ int sc_cmd_bench_spheres(int argc, char **argv)
         printf("  DRAM (%s triangles) copy ratio: %.2f SoA, %.2f indexed (target >= 0.8: %s)\n",
                quick ? "2e6" : "1e7", dr->copy_ratio, dri ? dri->copy_ratio : NAN,
                dr->copy_ratio >= 0.8 ? "met" : "NOT met");
-    if (top && nops)
-        printf("  power-of-two prescaling costs %.1f%% in L1 (%.1f vs %.1f Mtri/s without)\n",
-               100 * (nops->mtri / top->mtri - 1), top->mtri, nops->mtri);
+    if (top && gen)
+        printf("  fast path: %.2fx the general path in L1 (%.1f vs %.1f Mtri/s)\n", top->mtri / gen->mtri, top->mtri,
+               gen->mtri);
+    if (gen && nops)
+        printf("  power-of-two prescaling costs the general path %.1f%% in L1 (%.1f vs %.1f Mtri/s without)\n",
+               100 * (nops->mtri / gen->mtri - 1), gen->mtri, nops->mtri);
 
     int rc = 0;
     if (csv && sc_cli_write_atomic(csv, write_csv, &b) != 0) {

@@ -36,6 +36,40 @@ static inline ATTR uint32_t load_indexed_avx2(const sc_tri_source_f *src, size_t
     return (uint32_t)_mm256_movemask_ps(_mm256_castsi256_ps(badv));
 }
 
+/* The same 8 triangles without gathers: one 16-byte load per vertex,
+ * two vertices to a 256-bit register, a 4x4 transpose per 128-bit half.
+ * The fourth float read belongs to the next vertex, so every index must be
+ * <= vertex_count - 2; otherwise the gathers. */
+static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx2(const sc_tri_source_f *src,
+                                                                                  size_t first, void *out)
+{
+    const uint32_t *ix = src->indices + 3 * first;
+    const __m256i lim = _mm256_set1_epi32((int)(src->vertex_count - 2));
+    __m256i over = _mm256_setzero_si256();
+    for (int q = 0; q < 3; q++) {
+        __m256i idx = _mm256_loadu_si256((const __m256i *)(ix + 8 * q));
+        over = _mm256_or_si256(over, _mm256_xor_si256(_mm256_max_epu32(idx, lim), lim));
+    }
+    if (__builtin_expect(!_mm256_testz_si256(over, over) || src->vertex_count < 2, 0))
+        return load_indexed_avx2(src, first, out);
+    gather_v3_avx2 *P = out;
+    const float *v = src->vertices;
+    for (int k = 0; k < 3; k++) {
+        __m256 R[4];
+        for (int j = 0; j < 4; j++) {
+            /* Half h of R[j]: vertex k of triangle 4h + j. */
+            __m256 r = _mm256_castps128_ps256(_mm_loadu_ps(v + 3 * (size_t)ix[3 * j + k]));
+            R[j] = _mm256_insertf128_ps(r, _mm_loadu_ps(v + 3 * (size_t)ix[3 * (4 + j) + k]), 1);
+        }
+        __m256 t0 = _mm256_unpacklo_ps(R[0], R[1]), t1 = _mm256_unpackhi_ps(R[0], R[1]);
+        __m256 t2 = _mm256_unpacklo_ps(R[2], R[3]), t3 = _mm256_unpackhi_ps(R[2], R[3]);
+        P[k].x = _mm256_shuffle_ps(t0, t2, 0x44);
+        P[k].y = _mm256_shuffle_ps(t0, t2, 0xee);
+        P[k].z = _mm256_shuffle_ps(t1, t3, 0x44);
+    }
+    return 0;
+}
+
 #define VP f32x8
 #define REAL float
 #define REAL_U (FLT_EPSILON / 2)
@@ -43,7 +77,7 @@ static inline ATTR uint32_t load_indexed_avx2(const sc_tri_source_f *src, size_t
 #define FUNC spheres_f_avx2
 #define SOURCE sc_tri_source_f
 #define SOA sc_spheres_soaf
-#define LOAD_INDEXED(src, first, P) load_indexed_avx2(src, first, P)
+#define LOAD_INDEXED(src, first, P) load_indexed_rows_avx2(src, first, P)
 #include "sphere_batch_template.h"
 #undef LOAD_INDEXED
 #undef VP

@@ -22,9 +22,22 @@ typedef struct sc_tri_source_d {
     const double *soa[3][3];
 } sc_tri_source_d;
 
-/* Benchmark-only switch: skip the power-of-two prescaling, to measure what
- * it costs (float then only covers triangle sizes of about 1e-6..1e6). */
-enum { SC_KFLAG_NO_PRESCALE = 1u };
+/* Benchmark and test switches (the public API passes 0):
+ *  NO_PRESCALE  the general path skips the power-of-two prescaling, to
+ *               measure what it costs (float then only covers triangle
+ *               sizes of about 1e-6..1e6);
+ *  GENERAL      the conservative kinds skip their fast path (every lane
+ *               through the general one, as before the fast path);
+ *  NO_STREAM    plain stores even for outputs past SC_STREAM_MIN_COUNT. */
+enum { SC_KFLAG_NO_PRESCALE = 1u, SC_KFLAG_GENERAL = 2u, SC_KFLAG_NO_STREAM = 4u };
+
+/* From this many triangles on (float: 2 MiB of output, past L2) the
+ * results are written with streaming stores if the four output arrays are
+ * aligned to the vector width. */
+#define SC_STREAM_MIN_COUNT ((size_t)1 << 17)
+/* Indexed input, batches past SC_STREAM_MIN_COUNT: vertices are prefetched
+ * this many triangles ahead. */
+#define SC_PREFETCH_AHEAD ((size_t)64)
 
 typedef struct sc_kernels {
     sc_isa isa;

@@ -27,6 +27,9 @@
 
 #define SC_VI static inline
 
+/* Orders the streaming stores before whatever follows. */
+SC_VI void sc_store_fence(void) { _mm_sfence(); }
+
 /* ---------------- 128-bit: f32x4, f64x2 (SSE4.1) ---------------------- */
 #ifdef SC_VEC_F32X4
 typedef __m128 f32x4_t;
@@ -35,6 +38,7 @@ enum { f32x4_N = 4 };
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_set1(float x) { return _mm_set1_ps(x); }
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_load(const float *p) { return _mm_loadu_ps(p); }
 SC_VI SC_ATTR_SSE4 void f32x4_store(float *p, f32x4_t v) { _mm_storeu_ps(p, v); }
+SC_VI SC_ATTR_SSE4 void f32x4_stream(float *p, f32x4_t v) { _mm_stream_ps(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_add(f32x4_t a, f32x4_t b) { return _mm_add_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_sub(f32x4_t a, f32x4_t b) { return _mm_sub_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_mul(f32x4_t a, f32x4_t b) { return _mm_mul_ps(a, b); }
@@ -76,6 +80,7 @@ enum { f64x2_N = 2 };
 SC_VI SC_ATTR_SSE4 f64x2_t f64x2_set1(double x) { return _mm_set1_pd(x); }
 SC_VI SC_ATTR_SSE4 f64x2_t f64x2_load(const double *p) { return _mm_loadu_pd(p); }
 SC_VI SC_ATTR_SSE4 void f64x2_store(double *p, f64x2_t v) { _mm_storeu_pd(p, v); }
+SC_VI SC_ATTR_SSE4 void f64x2_stream(double *p, f64x2_t v) { _mm_stream_pd(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_SSE4 f64x2_t f64x2_add(f64x2_t a, f64x2_t b) { return _mm_add_pd(a, b); }
 SC_VI SC_ATTR_SSE4 f64x2_t f64x2_sub(f64x2_t a, f64x2_t b) { return _mm_sub_pd(a, b); }
 SC_VI SC_ATTR_SSE4 f64x2_t f64x2_mul(f64x2_t a, f64x2_t b) { return _mm_mul_pd(a, b); }
@@ -118,6 +123,7 @@ enum { f32x8_N = 8 };
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_set1(float x) { return _mm256_set1_ps(x); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_load(const float *p) { return _mm256_loadu_ps(p); }
 SC_VI SC_ATTR_AVX2 void f32x8_store(float *p, f32x8_t v) { _mm256_storeu_ps(p, v); }
+SC_VI SC_ATTR_AVX2 void f32x8_stream(float *p, f32x8_t v) { _mm256_stream_ps(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_add(f32x8_t a, f32x8_t b) { return _mm256_add_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sub(f32x8_t a, f32x8_t b) { return _mm256_sub_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_mul(f32x8_t a, f32x8_t b) { return _mm256_mul_ps(a, b); }
@@ -164,6 +170,7 @@ enum { f64x4_N = 4 };
 SC_VI SC_ATTR_AVX2 f64x4_t f64x4_set1(double x) { return _mm256_set1_pd(x); }
 SC_VI SC_ATTR_AVX2 f64x4_t f64x4_load(const double *p) { return _mm256_loadu_pd(p); }
 SC_VI SC_ATTR_AVX2 void f64x4_store(double *p, f64x4_t v) { _mm256_storeu_pd(p, v); }
+SC_VI SC_ATTR_AVX2 void f64x4_stream(double *p, f64x4_t v) { _mm256_stream_pd(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX2 f64x4_t f64x4_add(f64x4_t a, f64x4_t b) { return _mm256_add_pd(a, b); }
 SC_VI SC_ATTR_AVX2 f64x4_t f64x4_sub(f64x4_t a, f64x4_t b) { return _mm256_sub_pd(a, b); }
 SC_VI SC_ATTR_AVX2 f64x4_t f64x4_mul(f64x4_t a, f64x4_t b) { return _mm256_mul_pd(a, b); }
@@ -206,6 +213,7 @@ enum { f32x16_N = 16 };
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_set1(float x) { return _mm512_set1_ps(x); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_load(const float *p) { return _mm512_loadu_ps(p); }
 SC_VI SC_ATTR_AVX512 void f32x16_store(float *p, f32x16_t v) { _mm512_storeu_ps(p, v); }
+SC_VI SC_ATTR_AVX512 void f32x16_stream(float *p, f32x16_t v) { _mm512_stream_ps(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_add(f32x16_t a, f32x16_t b) { return _mm512_add_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sub(f32x16_t a, f32x16_t b) { return _mm512_sub_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_mul(f32x16_t a, f32x16_t b) { return _mm512_mul_ps(a, b); }
@@ -247,6 +255,7 @@ enum { f64x8_N = 8 };
 SC_VI SC_ATTR_AVX512 f64x8_t f64x8_set1(double x) { return _mm512_set1_pd(x); }
 SC_VI SC_ATTR_AVX512 f64x8_t f64x8_load(const double *p) { return _mm512_loadu_pd(p); }
 SC_VI SC_ATTR_AVX512 void f64x8_store(double *p, f64x8_t v) { _mm512_storeu_pd(p, v); }
+SC_VI SC_ATTR_AVX512 void f64x8_stream(double *p, f64x8_t v) { _mm512_stream_pd(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX512 f64x8_t f64x8_add(f64x8_t a, f64x8_t b) { return _mm512_add_pd(a, b); }
 SC_VI SC_ATTR_AVX512 f64x8_t f64x8_sub(f64x8_t a, f64x8_t b) { return _mm512_sub_pd(a, b); }
 SC_VI SC_ATTR_AVX512 f64x8_t f64x8_mul(f64x8_t a, f64x8_t b) { return _mm512_mul_pd(a, b); }

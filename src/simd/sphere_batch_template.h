@@ -7,14 +7,23 @@
  *   ATTR      the ISA's target attribute
  *   FUNC      name of the kernel to define (sc_kernels.spheres_f / _d)
  *   SOURCE    sc_tri_source_f | sc_tri_source_d;  SOA  sc_spheres_soaf | _soad
- *   LOAD_INDEXED (optional) a full-vector indexed loader with hardware gathers:
+ *   LOAD_INDEXED (optional) a full-vector indexed loader (row loads or gathers):
  *             uint32_t LOAD_INDEXED(const SOURCE *src, size_t first, VT P[3][3])
  *             returning the bit mask of lanes with an index out of range.
  *
  * The operation order mirrors src/sphere/circumsphere_template.h, the
  * specification, so that without FMA the result is bit-identical; with FMA
  * each a*b + c below is fused.
+ *
+ * Two paths. LOCAL(one) is the general one: the specification for every
+ * kind and every input (prescaling, degenerate, non-finite, overflowing).
+ * The conservative (prefilter) kinds first run LOCAL(fast), the same
+ * arithmetic without prescaling on the common in-range triangles, with
+ * the subexpressions the minimal-sphere test and the circumcentre share
+ * computed once; only a vector with a lane outside that domain also runs
+ * the general path, and only for those lanes (LOCAL(finish)).
  */
+#include <string.h>
 
 #define TCAT_(a, b) a##_##b
 #define TCAT(a, b) TCAT_(a, b)
@@ -24,6 +33,7 @@
 #define vset1 TCAT(VP, set1)
 #define vload TCAT(VP, load)
 #define vstore TCAT(VP, store)
+#define vstream TCAT(VP, stream)
 #define vadd TCAT(VP, add)
 #define vsub TCAT(VP, sub)
 #define vmul TCAT(VP, mul)
@@ -46,11 +56,25 @@
 #define vpow2pair TCAT(VP, pow2pair)
 #define LOCAL(name) TCAT(FUNC, name)
 
+/* Fast-path domain (see LOCAL(fast)); float: edges 2^-20..2^20 long, the
+ * angle at C at least 2^-24 from 0 and pi; double: 2^-150..2^150, 2^-52. */
+#define FAST_F32 (sizeof(REAL) == sizeof(float))
+#define FAST_L_LO ((REAL)(FAST_F32 ? 0x1p-40 : 0x1p-300))
+#define FAST_L_HI ((REAL)(FAST_F32 ? 0x1p40 : 0x1p300))
+#define FAST_SIN2 ((REAL)(FAST_F32 ? 0x1p-48 : 0x1p-104))
+#define FAST_NN_LO ((REAL)(FAST_F32 ? 0x1p-96 : 0x1p-800))
+#define FAST_R2_HI ((REAL)(FAST_F32 ? FLT_MAX : DBL_MAX))
+
 typedef struct { VT x, y, z; } LOCAL(v3);
 
 static inline ATTR LOCAL(v3) LOCAL(sub3)(LOCAL(v3) p, LOCAL(v3) q)
 {
     return (LOCAL(v3)){ vsub(p.x, q.x), vsub(p.y, q.y), vsub(p.z, q.z) };
+}
+
+static inline ATTR LOCAL(v3) LOCAL(add3)(LOCAL(v3) p, LOCAL(v3) q)
+{
+    return (LOCAL(v3)){ vadd(p.x, q.x), vadd(p.y, q.y), vadd(p.z, q.z) };
 }
 
 /* x0*y0 + x1*y1 + x2*y2, summed left to right as in the specification. */
@@ -285,6 +309,88 @@ static inline ATTR void LOCAL(one)(const LOCAL(v3) P[3], VM bad, int method, int
     *radius2 = vsel(have_c, r2, inf);
 }
 
+/* Fast path of the conservative kinds for the common case, bit for bit the
+ * computation of LOCAL(one) without its prescaling: every edge's squared
+ * length L_i in [FAST_L_LO, FAST_L_HI] (so every input is finite, no
+ * vertex repeats, and no product below can overflow), and, where the
+ * circumcentre is used, |n|^2 >= FAST_SIN2 |a|^2 |b|^2 (the angle at C is
+ * not within ~u of 0 or pi) and |n|^2 >= FAST_NN_LO (no product that
+ * matters is subnormal). In that range the power-of-two scaling of the
+ * specification is exact, so skipping it changes no bit except where a
+ * negligible subnormal intermediate rounds differently. What is shared:
+ * the three edges give the longest-edge rotation, a, b, |a|^2, |b|^2, the
+ * obtuse test (the largest angle is the one opposite the longest edge) and
+ * the midpoint; the circumcentre and the padded r2 reuse them.
+ * Returns the lanes that need the general path (LOCAL(one)). */
+static inline ATTR __attribute__((always_inline)) VM LOCAL(fast)(const LOCAL(v3) P[3], int method, int kind, LOCAL(v3) *centre, VT *radius2)
+{
+    const VT lo = vset1(FAST_L_LO), hi = vset1(FAST_L_HI);
+    LOCAL(v3) e0 = LOCAL(sub3)(P[1], P[0]), e1 = LOCAL(sub3)(P[2], P[1]), e2 = LOCAL(sub3)(P[0], P[2]);
+    VT L0 = LOCAL(dot3)(e0, e0), L1 = LOCAL(dot3)(e1, e1), L2 = LOCAL(dot3)(e2, e2);
+    /* Ordered compares: NaN (non-finite input) fails them. */
+    VM ok = mand(mand(mand(vge(L0, lo), vle(L0, hi)), mand(vge(L1, lo), vle(L1, hi))),
+                 mand(vge(L2, lo), vle(L2, hi)));
+    /* The specification's rotation: C opposite the longest edge e_k, ties as
+     * there. With a = V0 - V2 = e_{k+2} and b = V1 - V2 = -e_{k+1}, the
+     * textbook formula below is written with e' = e_{k+1} and the signs
+     * folded in, which rounds exactly like the specification's a, b. */
+    VM rot1 = mand(vgt(L1, L0), vge(L1, L2));
+    VM rot2 = mandnot(rot1, mand(vgt(L2, L0), vgt(L2, L1)));
+    LOCAL(v3) a = LOCAL(sel3)(rot1, e0, LOCAL(sel3)(rot2, e1, e2));
+    LOCAL(v3) ep = LOCAL(sel3)(rot1, e2, LOCAL(sel3)(rot2, e0, e1));
+    LOCAL(v3) V2 = LOCAL(sel3)(rot1, P[0], LOCAL(sel3)(rot2, P[1], P[2]));
+    VT aa = vsel(rot1, L0, vsel(rot2, L1, L2)), bb = vsel(rot1, L2, vsel(rot2, L0, L1));
+
+    LOCAL(v3) n = LOCAL(cross3)(a, ep);                         /* -(a x b) */
+    VT nn = LOCAL(dot3)(n, n);
+    LOCAL(v3) off;
+    VM circ_ok;
+    if (method == SC_METHOD_TEXTBOOK) {
+        LOCAL(v3) u = { vfmadd(aa, ep.x, vmul(bb, a.x)), vfmadd(aa, ep.y, vmul(bb, a.y)),
+                        vfmadd(aa, ep.z, vmul(bb, a.z)) };      /* -(aa b - bb a) */
+        LOCAL(v3) un = LOCAL(cross3)(u, n);
+        VT inv = vdiv(vset1(1), vadd(nn, nn));
+        off = (LOCAL(v3)){ vmul(un.x, inv), vmul(un.y, inv), vmul(un.z, inv) };
+        circ_ok = veq(lo, lo);
+    } else {
+        /* The other methods as the general path has them (b negated: only
+         * the sign of a zero can differ). */
+        const VT m1 = vset1(-1);
+        LOCAL(v3) b = { vmul(ep.x, m1), vmul(ep.y, m1), vmul(ep.z, m1) };
+        VT r2s;
+        LOCAL(circum)(a, b, method, &off, &r2s, &circ_ok);
+    }
+    /* Rounded offset then sum, like the specification's V2 + off * up. */
+    LOCAL(v3) c = LOCAL(add3)(V2, off);
+    circ_ok = mand(circ_ok, mand(vge(nn, vset1(FAST_NN_LO)), vge(nn, vmul(vmul(aa, vset1(FAST_SIN2)), bb))));
+    if (kind == SC_BATCH_PREFILTER_MINIMAL) {
+        /* Right or obtuse at C iff a.b <= 0: the longest edge's midpoint,
+         * V0 + e_k / 2 as in the specification. The specification tests
+         * every vertex and takes the most obtuse; where the rounded tests
+         * call another vertex right or obtuse too (needles whose two long
+         * edges tie to working precision) the general path decides. */
+        LOCAL(v3) eL = LOCAL(sel3)(rot1, e1, LOCAL(sel3)(rot2, e2, e0));
+        LOCAL(v3) V0 = LOCAL(sel3)(rot1, P[1], LOCAL(sel3)(rot2, P[2], P[0]));
+        const VT zero = vset1(0), half = vset1((REAL)0.5);
+        VM obtuse = vge(LOCAL(dot3)(a, ep), zero);
+        VM other = mor(vge(LOCAL(dot3)(eL, a), zero), vge(LOCAL(dot3)(ep, eL), zero));
+        LOCAL(v3) mid = { vfmadd(eL.x, half, V0.x), vfmadd(eL.y, half, V0.y), vfmadd(eL.z, half, V0.z) };
+        c = LOCAL(sel3)(obtuse, mid, c);
+        ok = mand(ok, mandnot(other, mor(obtuse, circ_ok)));
+    } else {
+        ok = mand(ok, circ_ok);
+    }
+    VT worst = vset1(0);
+    for (int k = 0; k < 3; k++) {
+        LOCAL(v3) d = LOCAL(sub3)(P[k], c);
+        worst = vmax(worst, LOCAL(dot3)(d, d));
+    }
+    VT r2 = vadd(vmul(worst, vset1(1 + 8 * REAL_U)), vset1(8 * REAL_TRUE_MIN));
+    *centre = c;
+    *radius2 = r2;
+    return mandnot(mand(ok, vle(r2, vset1(FAST_R2_HI))), veq(lo, lo));   /* lanes not ok */
+}
+
 /* Lanes [first, first + NL) with lanes >= count padded by zeros; returns
  * the out-of-range-index lanes. Scalar loads: for tails and ISAs without
  * gathers. */
@@ -318,39 +424,115 @@ static inline ATTR uint32_t LOCAL(load_lanes)(const SOURCE *src, size_t first, s
     return bad;
 }
 
-static ATTR size_t FUNC(const SOURCE *src, size_t count, int method, int kind, unsigned flags,
-                        const SOA *out)
+/* Stores of one vector of results: streaming (non-temporal) for outputs
+ * far larger than the caches, which then skip the read-for-ownership of
+ * lines that are only written, like a large memcpy does. */
+static inline ATTR void LOCAL(put)(const SOA *out, size_t i, LOCAL(v3) c, VT r2, int nt)
 {
-    size_t nbad = 0, i = 0;
-    for (; i < count; i += NL) {
-        LOCAL(v3) P[3], c;
-        VT r2;
-        uint32_t bad;
-        if (i + NL <= count && !src->indices) {
-            for (int k = 0; k < 3; k++)
-                P[k] = (LOCAL(v3)){ vload(src->soa[k][0] + i), vload(src->soa[k][1] + i),
-                                    vload(src->soa[k][2] + i) };
-            bad = 0;
-        } else
-#ifdef LOAD_INDEXED
-        if (i + NL <= count) {
-            bad = LOAD_INDEXED(src, i, P);
-        } else
-#endif
-        {
-            bad = LOCAL(load_lanes)(src, i, count, P);
-        }
-        nbad += (size_t)__builtin_popcount(bad);
-        LOCAL(one)(P, TCAT(VP, mask_from_bits)(bad), method, kind, flags, &c, &r2);
+    if (nt) {
+        vstream(out->cx + i, c.x);
+        vstream(out->cy + i, c.y);
+        vstream(out->cz + i, c.z);
+        vstream(out->r2 + i, r2);
+    } else {
         vstore(out->cx + i, c.x);
         vstore(out->cy + i, c.y);
         vstore(out->cz + i, c.z);
         vstore(out->r2 + i, r2);
     }
+}
+
+/* The vectors the fast path cannot finish: the general path for the lanes
+ * in `need`, blended with the fast lanes (so a lane's result never
+ * depends on its neighbours). Out of line so that the fast loop keeps its
+ * values in registers; plain stores. */
+static ATTR __attribute__((noinline)) void LOCAL(finish)(const LOCAL(v3) P[3], VM bad, VM need,
+                                                         const LOCAL(v3) *cf, const VT *r2f, int method,
+                                                         int kind, unsigned flags, const SOA *out, size_t i)
+{
+    LOCAL(v3) c;
+    VT r2;
+    LOCAL(one)(P, bad, method, kind, flags, &c, &r2);
+    LOCAL(put)(out, i, LOCAL(sel3)(need, c, *cf), vsel(need, r2, *r2f), 0);
+}
+
+/* One vector of triangles to its stored spheres. P and every result stay
+ * in registers on the fast path: only LOCAL(finish) and LOCAL(one), out of
+ * line, see copies in memory. */
+static inline ATTR __attribute__((always_inline)) void LOCAL(step)(LOCAL(v3) P0, LOCAL(v3) P1, LOCAL(v3) P2, uint32_t bad, int fast,
+                                    int method, int kind, unsigned flags, const SOA *out, size_t i, int nt)
+{
+    const LOCAL(v3) P[3] = { P0, P1, P2 };
+    VM badm = TCAT(VP, mask_from_bits)(bad);
+    if (fast) {
+        LOCAL(v3) c;
+        VT r2;
+        VM need = mor(LOCAL(fast)(P, method, kind, &c, &r2), badm);
+        if (__builtin_expect(mbits(need) == 0, 1)) {
+            LOCAL(put)(out, i, c, r2, nt);
+        } else {
+            LOCAL(v3) Q[3] = { P0, P1, P2 }, cf = c;
+            VT r2f = r2;
+            LOCAL(finish)(Q, badm, need, &cf, &r2f, method, kind, flags, out, i);
+        }
+    } else {
+        LOCAL(v3) Q[3] = { P0, P1, P2 }, c;
+        VT r2;
+        LOCAL(one)(Q, badm, method, kind, flags, &c, &r2);
+        LOCAL(put)(out, i, c, r2, nt);
+    }
+}
+
+static ATTR size_t FUNC(const SOURCE *src, size_t count, int method, int kind, unsigned flags,
+                        const SOA *out)
+{
+    size_t nbad = 0, i = 0;
+    const int fast = kind >= SC_BATCH_PREFILTER_CIRCUM && !(flags & SC_KFLAG_GENERAL);
+    const uintptr_t align = (uintptr_t)out->cx | (uintptr_t)out->cy | (uintptr_t)out->cz | (uintptr_t)out->r2;
+    const int nt = count >= SC_STREAM_MIN_COUNT && align % (NL * sizeof(REAL)) == 0 && !(flags & SC_KFLAG_NO_STREAM);
+    const SOA o = *out;
+    if (!src->indices) {
+        const REAL *soa[3][3];
+        memcpy(soa, src->soa, sizeof soa);
+        for (; i + NL <= count; i += NL) {
+            LOCAL(v3) P[3];
+            for (int k = 0; k < 3; k++)
+                P[k] = (LOCAL(v3)){ vload(soa[k][0] + i), vload(soa[k][1] + i), vload(soa[k][2] + i) };
+            LOCAL(step)(P[0], P[1], P[2], 0, fast, method, kind, flags, &o, i, nt);
+        }
+    }
+    else {
+        /* Shuffled index buffers miss the caches on every vertex: touch the
+         * vertices of the triangles a few vectors ahead so that their
+         * misses overlap (large batches only; indices are read in order). */
+        const size_t pf = count >= SC_STREAM_MIN_COUNT ? SC_PREFETCH_AHEAD : 0;
+        for (; i + NL <= count; i += NL) {
+            LOCAL(v3) P[3];
+            if (pf && i + pf + NL <= count)
+                for (size_t t = 3 * (i + pf); t < 3 * (i + pf + NL); t++)
+                    __builtin_prefetch((const void *)((uintptr_t)src->vertices +
+                                                      (uintptr_t)src->indices[t] * (3 * sizeof(REAL))));
+#ifdef LOAD_INDEXED
+            uint32_t bad = LOAD_INDEXED(src, i, P);
+#else
+            uint32_t bad = LOCAL(load_lanes)(src, i, count, P);
+#endif
+            nbad += (size_t)__builtin_popcount(bad);
+            LOCAL(step)(P[0], P[1], P[2], bad, fast, method, kind, flags, &o, i, nt);
+        }
+    }
+    for (; i < count; i += NL) {
+        LOCAL(v3) P[3];
+        uint32_t bad = LOCAL(load_lanes)(src, i, count, P);
+        nbad += (size_t)__builtin_popcount(bad);
+        LOCAL(step)(P[0], P[1], P[2], bad, fast, method, kind, flags, &o, i, nt);
+    }
+    if (nt)
+        sc_store_fence();
     /* Padding lanes (and what the last vector wrote past count): empty. */
     size_t padded = (count + 15) & ~(size_t)15;
     for (size_t t = count; t < padded; t++)
-        out->cx[t] = out->cy[t] = out->cz[t] = 0, out->r2[t] = -1;
+        o.cx[t] = o.cy[t] = o.cz[t] = 0, o.r2[t] = -1;
     return nbad;
 }
 
@@ -362,6 +544,7 @@ static ATTR size_t FUNC(const SOURCE *src, size_t count, int method, int kind, u
 #undef vset1
 #undef vload
 #undef vstore
+#undef vstream
 #undef vadd
 #undef vsub
 #undef vmul
@@ -383,3 +566,9 @@ static ATTR size_t FUNC(const SOURCE *src, size_t count, int method, int kind, u
 #undef mbits
 #undef vpow2pair
 #undef LOCAL
+#undef FAST_F32
+#undef FAST_L_LO
+#undef FAST_L_HI
+#undef FAST_SIN2
+#undef FAST_NN_LO
+#undef FAST_R2_HI
