@@ -3,3 +3,10 @@
 sc_add_test(test_bvh SOURCES test_bvh.c
             ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
 sc_add_test(test_bvh_watertight SOURCES test_bvh_watertight.c)
+
+# Prefilter modes never change an answer, on every shipped and shared scene.
+if(TARGET spherecull_scene)
+  sc_add_test(test_scene_modes SOURCES test_scene_modes.c LIBS spherecull_scene
+              ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
+  target_compile_definitions(test_scene_modes PRIVATE SC_SCENES_DIR="${PROJECT_SOURCE_DIR}/scenes")
+endif()
