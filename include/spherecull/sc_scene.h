@@ -29,7 +29,11 @@
  *     they are legal geometry a tracer must survive;
  *   - out-of-range indices are an error (SC_ERR_INVALID_ARGUMENT for raw
  *     buffers, SC_ERR_PARSE in files);
- *   - a missing material gives the default colour and a warning.
+ *   - a missing material gives the default colour and a warning;
+ *   - a mesh file that crashes assimp (SIGSEGV, an uncatchable exception)
+ *     is SC_ERR_PARSE; one that needs more than the import time limit or
+ *     memory cap is SC_ERR_LIMIT: the import runs in a child process (see
+ *     sc_scene_options), so neither takes the caller down.
  *
  * Warnings go to options->warn (the library never prints); at most
  * SC_SCENE_MAX_WARNINGS are forwarded per load, then one summary line.
@@ -53,6 +57,7 @@ extern "C" {
 #define SC_SCENE_DEFAULT_WIDTH 800
 #define SC_SCENE_DEFAULT_HEIGHT 600
 #define SC_SCENE_MAX_WARNINGS 16
+#define SC_SCENE_DEFAULT_IMPORT_TIMEOUT_MS 120000u
 
 typedef struct sc_scene sc_scene;   /* opaque */
 
@@ -76,6 +81,26 @@ typedef struct sc_scene_options {
     uint64_t seed;              /* procedural scenes */
     sc_scene_warn_fn warn;      /* NULL: warnings are only counted */
     void *warn_ctx;
+    /* Mesh files are imported by assimp in a child process by default: a
+     * damaged file can crash assimp (SIGSEGV, an exception thrown where it
+     * cannot be caught) or make it loop forever, and neither may take the
+     * caller down. The child streams the triangles back through a pipe; a
+     * crash or an import slower than the time limit becomes one error line
+     * (SC_ERR_PARSE for a crash, SC_ERR_LIMIT for the time limit).
+     * import_timeout_ms 0: $SPHERECULL_IMPORT_TIMEOUT (seconds) if set, else
+     * SC_SCENE_DEFAULT_IMPORT_TIMEOUT_MS. import_in_process 1 (or
+     * $SPHERECULL_IMPORT=in-process) imports in the calling process: no
+     * fork, but a hostile file can then crash or hang the caller. */
+    uint32_t import_timeout_ms;
+    int import_in_process;
+    /* Data memory (RLIMIT_DATA: heap and private mappings, reserved rather
+     * than touched) the import child may allocate beyond what it inherits,
+     * so a file claiming billions of elements is refused instead of
+     * exhausting the machine: SC_ERR_LIMIT. 0: $SPHERECULL_IMPORT_MEMORY
+     * (MiB) if set, else 1 GiB + 2 KiB per triangle of the cap (assimp's OBJ
+     * reader reserves ~1.2 KiB and touches ~0.6 KiB per triangle), at most
+     * half the physical memory. Not enforced in-process. */
+    uint64_t max_import_bytes;
 } sc_scene_options;
 
 /* Read-only view of a scene; valid until the scene is freed or modified. */
@@ -111,14 +136,23 @@ void sc_scene_options_init(sc_scene_options *options);
 sc_status sc_scene_load(const char *spec, const sc_scene_options *options,
                         sc_scene **out, char *err, size_t errlen);
 
+/* A scene description from memory: text (len bytes, need not be
+ * NUL-terminated) in the "*.json" format. Relative mesh paths resolve
+ * against base_dir (NULL: the current directory); name labels messages
+ * (NULL: "<memory>"). Same contract as sc_scene_load. */
+sc_status sc_scene_load_json_text(const char *text, size_t len, const char *name,
+                                  const char *base_dir, const sc_scene_options *options,
+                                  sc_scene **out, char *err, size_t errlen);
+
 /* An empty scene for raw buffers: no triangles, default camera, no lights.
  * The options (cap, warning callback) are copied and apply to later calls. */
 sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out);
 
 /* Appends one mesh; color may be NULL (default grey). Indices must be
  * < num_vertices. Triangles touching a non-finite vertex are dropped with a
- * warning. Returns SC_ERR_LIMIT, leaving the scene unchanged, when the cap
- * would be exceeded. */
+ * warning. Returns SC_ERR_LIMIT, leaving the scene unchanged, when the
+ * counts would exceed the cap: checked on num_vertices and num_triangles
+ * before either buffer is read. */
 sc_status sc_scene_add_mesh(sc_scene *scene, const float *positions, size_t num_vertices,
                             const uint32_t *indices, size_t num_triangles,
                             const float color[3], char *err, size_t errlen);

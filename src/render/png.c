@@ -63,6 +63,11 @@ sc_status sc_png_write(const char *path, const sc_image *img, char *err, size_t 
 {
     if (!path || !*path || !img || !img->rgb || !size_ok(img->width, img->height))
         return fail(err, errlen, SC_ERR_INVALID_ARGUMENT, "invalid PNG path or image");
+    /* The rename below would replace a device or a symlink to one (as root,
+     * -o /dev/null turned /dev/null into a PNG file): refuse instead. */
+    struct stat sb;
+    if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+        return fail(err, errlen, SC_ERR_IO, "%s: not a regular file; PNG outputs replace their target", path);
     size_t len = strlen(path);
     char *tmp = malloc(len + 16);
     if (!tmp)

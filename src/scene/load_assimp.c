@@ -222,7 +222,7 @@ static sc_status walk(walk_ctx *w, const struct aiNode *node, const double paren
 /* Checks what assimp would report vaguely ("No suitable reader", "file is
  * too small") so the user hears the real reason, and screens out inputs
  * that hang the Debian build of assimp 5.2 outright. */
-static sc_status check_file(const char *path, char *err, size_t errlen)
+sc_status sc_scene_check_mesh_file(const char *path, char *err, size_t errlen)
 {
     struct stat sb;
     if (stat(path, &sb) != 0)
@@ -340,14 +340,28 @@ static int sanitize(struct aiScene *ai, const char *path, char *err, size_t errl
 sc_status sc_scene_load_assimp(sc_scene *s, const char *path, const double xform[16],
                                const float *color, char *err, size_t errlen)
 {
-    sc_status st = check_file(path, err, errlen);
-    if (st != SC_OK || !sc_scene_assimp_assert_hook())
+    /* Checked here, in the caller, so the common mistakes (missing file,
+     * directory, empty file) cost no fork and give the precise message. */
+    sc_status st = sc_scene_check_mesh_file(path, err, errlen);
+    if (st != SC_OK)
         return st;
+    if (s->import_in_process)
+        return sc_scene_import_assimp(s, path, xform, color, 1, err, errlen);
+    return sc_scene_import_isolated(s, path, xform, color, err, errlen);
+}
+
+sc_status sc_scene_import_assimp(sc_scene *s, const char *path, const double xform[16],
+                                 const float *color, int take_lock, char *err, size_t errlen)
+{
+    sc_status st = SC_OK;
+    if (!sc_scene_assimp_assert_hook())
+        return SC_ERR_UNSUPPORTED;
 
     log_capture *log = calloc(1, sizeof *log);
     if (!log)
         return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "out of memory");
-    pthread_mutex_lock(&import_lock);
+    if (take_lock)
+        pthread_mutex_lock(&import_lock);
     struct aiLogStream stream = { log_callback, (char *)(void *)log };
     aiAttachLogStream(&stream);
     const struct aiScene *ai = aiImportFile(path, aiProcess_ValidateDataStructure);
@@ -367,7 +381,8 @@ sc_status sc_scene_load_assimp(sc_scene *s, const char *path, const double xform
             snprintf(aierr, sizeof aierr, "%s", aiGetErrorString());
     }
     aiDetachLogStream(&stream);
-    pthread_mutex_unlock(&import_lock);
+    if (take_lock)
+        pthread_mutex_unlock(&import_lock);
 
     if (!ai) {
         if (st == SC_ERR_PARSE)   /* aierr is our own complete message */

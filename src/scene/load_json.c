@@ -31,17 +31,21 @@ typedef struct jctx {
 static void warn_unknown_keys(jctx *c, const cJSON *obj, const char *where,
                               const char *const *known)
 {
+    /* Linear in the number of keys: a hostile file may hold a million of
+     * them, so duplicates are looked for only among the known keys (a
+     * duplicated unknown key is already reported as unknown). */
+    enum { MAX_KNOWN = 16 };
+    int seen[MAX_KNOWN] = { 0 };
     for (const cJSON *it = obj->child; it; it = it->next) {
-        int ok = 0;
-        for (const char *const *k = known; *k && !ok; k++)
-            ok = it->string && strcmp(it->string, *k) == 0;
-        if (!ok)
+        int k = 0;
+        while (known[k] && k < MAX_KNOWN && !(it->string && strcmp(it->string, known[k]) == 0))
+            k++;
+        if (!known[k] || k == MAX_KNOWN)
             sc_scene_warnf(c->s, "%s: unknown key '%s' in %s ignored", c->path,
                            it->string ? it->string : "?", where);
-        for (const cJSON *j = obj->child; j != it; j = j->next)
-            if (it->string && j->string && strcmp(it->string, j->string) == 0)
-                sc_scene_warnf(c->s, "%s: duplicate key '%s' in %s; the first one is used",
-                               c->path, it->string, where);
+        else if (seen[k]++ == 1)
+            sc_scene_warnf(c->s, "%s: duplicate key '%s' in %s; the first one is used",
+                           c->path, it->string, where);
     }
 }
 
@@ -409,10 +413,36 @@ sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t er
     sc_status st = read_file(&c, &buf, &len);
     if (st != SC_OK)
         return st;
-    if (memchr(buf, '\0', len)) {
+    char *dir = strdup(path);
+    if (!dir) {
         free(buf);
-        return JERR(&c, SC_ERR_PARSE, "%s: contains NUL bytes; not a JSON text file", path);
+        return JERR(&c, SC_ERR_OUT_OF_MEMORY, "out of memory");
     }
+    char *p = strrchr(dir, '/');
+    if (p)
+        *p = '\0';
+    else
+        strcpy(dir, ".");
+    if (p == dir)
+        strcpy(dir, "/");
+    st = sc_scene_load_json_buffer(s, path, dir, buf, len, err, errlen);
+    free(dir);
+    free(buf);
+    return st;
+}
+
+sc_status sc_scene_load_json_buffer(sc_scene *s, const char *path, const char *base_dir,
+                                    const char *buf, size_t len, char *err, size_t errlen)
+{
+    jctx c = { s, path, err, errlen };
+    sc_status st = SC_OK;
+    if (len == 0)
+        return JERR(&c, SC_ERR_PARSE, "%s: empty scene description", path);
+    if (len > MAX_JSON_BYTES)
+        return JERR(&c, SC_ERR_LIMIT, "%s: larger than %u MiB; scene files only reference meshes",
+                    path, MAX_JSON_BYTES >> 20);
+    if (memchr(buf, '\0', len))
+        return JERR(&c, SC_ERR_PARSE, "%s: contains NUL bytes; not a JSON text file", path);
     const char *end = NULL;
     /* The length includes the terminating NUL: with require_null_terminated
      * cJSON looks for it inside the buffer. */
@@ -421,7 +451,6 @@ sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t er
         int line, col;
         size_t off = end && end >= buf && end <= buf + len ? (size_t)(end - buf) : 0;
         line_col(buf, off, &line, &col);
-        free(buf);
         return JERR(&c, SC_ERR_PARSE, "%s:%d:%d: JSON syntax error", path, line, col);
     }
     if (!cJSON_IsObject(root)) {
@@ -431,20 +460,7 @@ sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t er
                                              "background", "ambient", "ground", "description",
                                              NULL };
         warn_unknown_keys(&c, root, "the scene", known);
-        char *dir = strdup(path);
-        if (!dir) {
-            st = JERR(&c, SC_ERR_OUT_OF_MEMORY, "out of memory");
-        } else {
-            char *p = strrchr(dir, '/');
-            if (p)
-                *p = '\0';
-            else
-                strcpy(dir, ".");
-            if (p == dir)
-                strcpy(dir, "/");
-            st = load_meshes(&c, root, dir);
-            free(dir);
-        }
+        st = load_meshes(&c, root, base_dir);
         float bg[3];
         double ambient;
         int r;
@@ -475,6 +491,5 @@ sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t er
             sc_scene_warnf(s, "%s: description should be a string", path);
     }
     cJSON_Delete(root);
-    free(buf);
     return st;
 }

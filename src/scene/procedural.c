@@ -217,6 +217,9 @@ static sc_status make_grid(sc_scene *s, const char *spec, const char *mesh, uint
     o.seed = s->seed;
     o.warn = s->warn;
     o.warn_ctx = s->warn_ctx;
+    o.import_timeout_ms = s->import_timeout_ms;
+    o.import_in_process = s->import_in_process;
+    o.max_import_bytes = s->max_import_bytes;
     sc_scene *sub;
     sc_status st = sc_scene_create(&o, &sub);
     if (st != SC_OK)

@@ -18,6 +18,17 @@ void sc_scene_options_init(sc_scene_options *o)
     o->seed = 1;
 }
 
+/* One printable line: loader messages (assimp's, say) quote pieces of a
+ * damaged file, newlines and terminal escape sequences included. */
+static void one_line(char *s)
+{
+    for (unsigned char *p = (unsigned char *)s; *p; p++)
+        if (*p == '\n' || *p == '\r' || *p == '\t')
+            *p = ' ';
+        else if (*p < 0x20 || *p == 0x7f)
+            *p = '?';
+}
+
 sc_status sc_scene_errf(char *err, size_t errlen, sc_status st, const char *fmt, ...)
 {
     if (err && errlen > 0) {
@@ -25,10 +36,7 @@ sc_status sc_scene_errf(char *err, size_t errlen, sc_status st, const char *fmt,
         va_start(ap, fmt);
         vsnprintf(err, errlen, fmt, ap);
         va_end(ap);
-        /* One line: a loader message (assimp's, say) may carry newlines. */
-        for (char *p = err; *p; p++)
-            if (*p == '\n' || *p == '\r')
-                *p = ' ';
+        one_line(err);
         size_t n = strlen(err);
         while (n > 0 && err[n - 1] == ' ')
             err[--n] = '\0';
@@ -46,9 +54,7 @@ void sc_scene_warnf(sc_scene *s, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    for (char *p = buf; *p; p++)
-        if (*p == '\n' || *p == '\r')
-            *p = ' ';
+    one_line(buf);
     size_t n = strlen(buf);
     while (n > 0 && buf[n - 1] == ' ')
         buf[--n] = '\0';
@@ -63,6 +69,38 @@ static void default_camera(sc_camera *c)
     c->fov_y_deg = 40;
     c->width = SC_SCENE_DEFAULT_WIDTH;
     c->height = SC_SCENE_DEFAULT_HEIGHT;
+}
+
+/* The environment lets a pipeline change the import policy without a
+ * new command-line option in every tool. */
+static uint32_t env_timeout_ms(void)
+{
+    const char *e = getenv("SPHERECULL_IMPORT_TIMEOUT");
+    if (e && *e) {
+        char *end;
+        double sec = strtod(e, &end);
+        if (*end == '\0' && sec > 0 && sec <= 86400)
+            return sec * 1000 < 1 ? 1u : (uint32_t)(sec * 1000);
+    }
+    return SC_SCENE_DEFAULT_IMPORT_TIMEOUT_MS;
+}
+
+static uint64_t env_import_bytes(void)
+{
+    const char *e = getenv("SPHERECULL_IMPORT_MEMORY");   /* MiB */
+    if (e && *e) {
+        char *end;
+        unsigned long long mib = strtoull(e, &end, 10);
+        if (*end == '\0' && mib > 0 && mib < (1ull << 40))
+            return (uint64_t)mib << 20;
+    }
+    return 0;
+}
+
+static int env_in_process(void)
+{
+    const char *e = getenv("SPHERECULL_IMPORT");
+    return e && strcmp(e, "in-process") == 0;
 }
 
 sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out)
@@ -83,6 +121,9 @@ sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out)
     s->seed = options->seed;
     s->warn = options->warn;
     s->warn_ctx = options->warn_ctx;
+    s->import_timeout_ms = options->import_timeout_ms ? options->import_timeout_ms : env_timeout_ms();
+    s->import_in_process = options->import_in_process || env_in_process();
+    s->max_import_bytes = options->max_import_bytes ? options->max_import_bytes : env_import_bytes();
     if (options->mesh_cache_dir) {
         s->cache_dir = strdup(options->mesh_cache_dir);
         if (!s->cache_dir) {
@@ -206,8 +247,17 @@ sc_status sc_scene_append_triangles(sc_scene *s, const float *positions, size_t 
         return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL scene or buffer");
     if (nt > 0 && nv == 0)
         return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "triangles without vertices");
-    if (nt > SIZE_MAX / 3)
-        return sc_scene_errf(err, errlen, SC_ERR_LIMIT, "too many triangles");
+    /* The caps come before the first read: a claimed count beyond them is
+     * refused without touching a buffer that may not be that long. */
+    uint64_t max_v = s->max_triangles > UINT32_MAX / 3 ? UINT32_MAX : 3 * s->max_triangles;
+    if (nt > s->max_triangles || nt > SIZE_MAX / 3 || nt > s->max_triangles - s->num_triangles)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT,
+                             "%zu more triangles would exceed the cap of %llu triangles", nt,
+                             (unsigned long long)s->max_triangles);
+    if (nv > max_v || nv > max_v - s->num_vertices)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT,
+                             "%zu more vertices would exceed the cap of %llu vertices", nv,
+                             (unsigned long long)max_v);
     for (size_t i = 0; i < 3 * nt; i++)
         if (indices[i] >= nv)
             return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT,
@@ -228,6 +278,10 @@ sc_status sc_scene_append_triangles(sc_scene *s, const float *positions, size_t 
         }
     }
 
+    /* Nothing to copy; on a fresh scene the arrays are still NULL, and
+     * NULL + 0 is undefined behaviour (UBSan, fuzz_mesh_buffers). */
+    if (nv == 0)
+        return SC_OK;
     sc_status st = sc_scene_reserve(s, nv, kept, err, errlen);
     if (st != SC_OK)
         return st;
@@ -572,27 +626,12 @@ sc_status sc_scene_append_spec(sc_scene *s, const char *spec, const double xform
     return st;
 }
 
-sc_status sc_scene_load(const char *spec, const sc_scene_options *options, sc_scene **out,
-                        char *err, size_t errlen)
+/* The common end of every load: a scene without triangles is an error,
+ * mesh files get an automatic camera and light, warnings beyond the limit
+ * are summarised. Frees s on failure. */
+static sc_status finish_load(sc_scene *s, sc_status st, const char *spec, int json,
+                             sc_scene **out, char *err, size_t errlen)
 {
-    if (err && errlen)
-        err[0] = '\0';
-    if (!out)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
-    *out = NULL;
-    if (!spec || !*spec)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "empty scene name");
-    sc_scene *s;
-    sc_status st = sc_scene_create(options, &s);
-    if (st != SC_OK)
-        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
-
-    int json = strncmp(spec, "proc:", 5) != 0 && strncmp(spec, "cache:", 6) != 0 &&
-               has_suffix_ci(spec, ".json");
-    if (json)
-        st = sc_scene_load_json(s, spec, err, errlen);
-    else
-        st = sc_scene_append_spec(s, spec, NULL, NULL, err, errlen);
     if (st == SC_OK && s->num_triangles == 0)
         st = sc_scene_errf(err, errlen, SC_ERR_PARSE, "%s: no triangles to render", spec);
     if (st == SC_OK && !json) {
@@ -614,4 +653,63 @@ sc_status sc_scene_load(const char *spec, const sc_scene_options *options, sc_sc
     }
     *out = s;
     return SC_OK;
+}
+
+sc_status sc_scene_load(const char *spec, const sc_scene_options *options, sc_scene **out,
+                        char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!out)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
+    *out = NULL;
+    if (!spec || !*spec)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "empty scene name");
+    sc_scene *s;
+    sc_status st = sc_scene_create(options, &s);
+    if (st != SC_OK)
+        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
+
+    int json = strncmp(spec, "proc:", 5) != 0 && strncmp(spec, "cache:", 6) != 0 &&
+               has_suffix_ci(spec, ".json");
+    if (json)
+        st = sc_scene_load_json(s, spec, err, errlen);
+    else
+        st = sc_scene_append_spec(s, spec, NULL, NULL, err, errlen);
+    return finish_load(s, st, spec, json, out, err, errlen);
+}
+
+sc_status sc_scene_load_json_text(const char *text, size_t len, const char *name,
+                                  const char *base_dir, const sc_scene_options *options,
+                                  sc_scene **out, char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!out)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
+    *out = NULL;
+    if (!text && len > 0)
+        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL scene text");
+    if (!name || !*name)
+        name = "<memory>";
+    if (!base_dir || !*base_dir)
+        base_dir = ".";
+    if (len >= SIZE_MAX)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT, "%s: scene text too large", name);
+    /* cJSON wants the terminating NUL inside the buffer it is given. */
+    char *buf = malloc(len + 1);
+    if (!buf)
+        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", name);
+    if (len)
+        memcpy(buf, text, len);
+    buf[len] = '\0';
+    sc_scene *s;
+    sc_status st = sc_scene_create(options, &s);
+    if (st != SC_OK) {
+        free(buf);
+        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
+    }
+    st = sc_scene_load_json_buffer(s, name, base_dir, buf, len, err, errlen);
+    free(buf);
+    return finish_load(s, st, name, 1, out, err, errlen);
 }

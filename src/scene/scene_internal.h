@@ -28,6 +28,9 @@ struct sc_scene {
     void *warn_ctx;
     size_t warnings, degenerate, dropped_nonfinite, skipped_primitives;
     int depth;                      /* nesting of proc:grid / json loads */
+    uint32_t import_timeout_ms;     /* resolved: never 0 */
+    int import_in_process;
+    uint64_t max_import_bytes;      /* 0: derived from the caps when importing */
 };
 
 #define SC_DEFAULT_GREY 0.75f
@@ -59,6 +62,22 @@ void sc_scene_bounds(const sc_scene *s, size_t first_triangle, double lo[3], dou
 sc_status sc_scene_load_assimp(sc_scene *s, const char *path, const double xform[16],
                                const float *color, char *err, size_t errlen);
 sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t errlen);
+/* The body of sc_scene_load_json on text already in memory (NUL at text[len]). */
+sc_status sc_scene_load_json_buffer(sc_scene *s, const char *path, const char *base_dir,
+                                    const char *text, size_t len, char *err, size_t errlen);
+
+/* The two halves of sc_scene_load_assimp (which picks one by the options):
+ * the import itself, in this process (take_lock: serialise against other
+ * threads; a forked child, single-threaded, must not wait on a lock some
+ * parent thread held at fork time), and the same import in a child process
+ * with a time limit (import_isolated.c). */
+sc_status sc_scene_import_assimp(sc_scene *s, const char *path, const double xform[16],
+                                 const float *color, int take_lock, char *err, size_t errlen);
+sc_status sc_scene_import_isolated(sc_scene *s, const char *path, const double xform[16],
+                                   const float *color, char *err, size_t errlen);
+/* Cheap checks before any import: missing, directory, empty, PLY headers
+ * that hang assimp. */
+sc_status sc_scene_check_mesh_file(const char *path, char *err, size_t errlen);
 sc_status sc_scene_load_procedural(sc_scene *s, const char *spec, const double xform[16],
                                    const float *color, char *err, size_t errlen);
 

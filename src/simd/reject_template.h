@@ -36,7 +36,9 @@ static inline ATTR uint32_t RCAT(RFUNC, lanes)(RV(t) ox, RV(t) oy, RV(t) oz, RV(
     RV(t) allowance = RV(add)(RV(mul)(r2, RV(set1)(1 + 0x1p-10f)),
                               RV(mul)(RV(set1)(1025 * (8 * (FLT_EPSILON / 2)) * (8 * (FLT_EPSILON / 2))), ococ));
     RV(t) reach = RV(mul)(allowance, dd);
-    RV(m) rej = RV(or)(empty, RV(gt)(cross2, reach));
+    /* Below 2^-100 the products may be subnormal: keep (prefilter.c). */
+    RV(m) trusted = RV(and)(RV(ge)(dd, RV(set1)(0x1p-100f)), RV(ge)(reach, RV(set1)(0x1p-100f)));
+    RV(m) rej = RV(gt)(cross2, reach);
 
     RV(t) px = RV(mul)(ocx, dx), py = RV(mul)(ocy, dy), pz = RV(mul)(ocz, dz);
     RV(t) b = RV(add)(RV(add)(px, py), pz);
@@ -47,7 +49,7 @@ static inline ATTR uint32_t RCAT(RFUNC, lanes)(RV(t) ox, RV(t) oy, RV(t) oz, RV(
     RV(t) beyond = RV(sub)(RV(mul)(b, RV(set1)(-1)), tmax_dd);   /* -b, exactly */
     RV(t) p = RV(sub)(beyond, RV(mul)(eight_u, RV(add)(babs, atmax_dd)));
     rej = RV(or)(rej, RV(and)(RV(gt)(p, zero), RV(gt)(RV(mul)(p, p), reach)));
-    return RV(bits)(rej);
+    return RV(bits)(RV(or)(empty, RV(and)(trusted, rej)));
 }
 
 static ATTR uint32_t RFUNC(const sc_ray *ray, const RGLUE(sc_sphere_block, W) *blk)

@@ -21,7 +21,13 @@ int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2)
     /* The second term covers the absolute rounding of oc, which grows with
      * the distance to the sphere while r2 does not (docs/numerics.md). */
     float allowance = r2 * (1 + 0x1p-10f) + 1025 * (8 * U) * (8 * U) * ococ;
-    if (cross2 > allowance * dd)
+    float reach = allowance * dd;                 /* >= (r |D|)^2 */
+    /* With dd or reach below 2^-100 the products behind them may be
+     * subnormal (|D| < 2^-50, or r |D| < 2^-50): their absolute rounding is
+     * no longer covered by the relative margins, so nothing is rejected. */
+    if (!(dd >= 0x1p-100f && reach >= 0x1p-100f))
+        return 0;
+    if (cross2 > reach)
         return 1;
 
     /* Along the ray the sphere spans dd*t in [-b - r|D|, -b + r|D|], b = oc.D.
@@ -29,7 +35,6 @@ int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2)
      * below can only err towards keeping the sphere. */
     float b = oc[0] * D[0] + oc[1] * D[1] + oc[2] * D[2];
     float babs = fabsf(oc[0] * D[0]) + fabsf(oc[1] * D[1]) + fabsf(oc[2] * D[2]);
-    float reach = allowance * dd;                 /* >= (r |D|)^2 */
     float before = b + ray->tmin * dd;            /* > 0: centre before tmin */
     float slack_min = 8 * U * (babs + fabsf(ray->tmin) * dd);
     float m = before - slack_min;
