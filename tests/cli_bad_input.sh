@@ -118,14 +118,10 @@ for cmd in render raster; do
   ok "$cmd -o directory"         $cmd proc:sphere:200 -o "$root/in" $SMALL_R
   ok "$cmd -o symlink to device" $cmd proc:sphere:200 -o "$root/full" $SMALL_R
 done
-xfail "the preview is written before --ids fails" \
-  "raster --ids missing dir" raster proc:sphere:200 -o out.png --ids /nonexistent/ids.png $SMALL_R
-xfail "the preview is written before --depth fails" \
-  "raster --depth read-only dir" raster proc:sphere:200 -o out.png --depth $ro/d.png $SMALL_R
-xfail "the path is tried only after the run, progress lines on stderr" \
-  "compare --csv missing dir" compare proc:sphere:200 $SMALL_C --csv /nonexistent/x.csv
-xfail "the path is tried only after the run, progress lines on stderr" \
-  "compare --json read-only dir" compare proc:sphere:200 $SMALL_C --json $ro/x.json
+ok "raster --ids missing dir" raster proc:sphere:200 -o out.png --ids /nonexistent/ids.png $SMALL_R
+ok "raster --depth read-only dir" raster proc:sphere:200 -o out.png --depth $ro/d.png $SMALL_R
+ok "compare --csv missing dir" compare proc:sphere:200 $SMALL_C --csv /nonexistent/x.csv
+ok "compare --json read-only dir" compare proc:sphere:200 $SMALL_C --json $ro/x.json
 ok "bench --csv missing dir"     bench proc:sphere:200 $SMALL_B --csv /nonexistent/x.csv
 ok "bench --csv symlink to device" bench proc:sphere:200 $SMALL_B --csv "$root/full"
 ok "accuracy --csv missing dir"  accuracy --n 5 --csv /nonexistent/x.csv

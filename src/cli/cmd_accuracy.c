@@ -156,6 +156,8 @@ int sc_cmd_accuracy(int argc, char **argv)
         }
     }
 
+    if (sc_cli_check_output("accuracy", "--csv", csv) != 0)
+        return 1;
     sc_acc_variant variants[MAX_VARIANTS];
     int nv = sc_acc_variants(variants, MAX_VARIANTS);
     report rep = { calloc((size_t)(2 * SC_FAM_COUNT * nv), sizeof(row)), 0 };

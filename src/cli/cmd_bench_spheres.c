@@ -491,6 +491,8 @@ int sc_cmd_bench_spheres(int argc, char **argv)
             return 2;
         }
     }
+    if (sc_cli_check_output(CMD, "--csv", csv) != 0 || sc_cli_check_output(CMD, "--plot", png) != 0)
+        return 1;
     sc_status st = sc_simd_init();
     if (st != SC_OK) {
         sc_cli_error(CMD, "SPHERECULL_ISA=%s: %s", getenv("SPHERECULL_ISA"), sc_strerror(st));

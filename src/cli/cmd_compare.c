@@ -362,6 +362,8 @@ int sc_cmd_compare(int argc, char **argv)
         return 2;
     }
 
+    if (sc_cli_check_output(CMD, "--csv", csv) != 0 || sc_cli_check_output(CMD, "--json", json) != 0)
+        return 1;
     sc_cmp_rows rows = { 0 };
     int rc = 0;
     for (int s = 0; s < nscenes && rc == 0; s++) {

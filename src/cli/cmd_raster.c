@@ -390,6 +390,9 @@ int sc_cmd_raster(int argc, char **argv)
         sc_cli_error(cmd, "needs SCENE and -o PREVIEW.png (try --help)");
         return 2;
     }
+    if (sc_cli_check_output(cmd, "-o", out) != 0 || sc_cli_check_output(cmd, "--ids", ids) != 0 ||
+        sc_cli_check_output(cmd, "--depth", depth) != 0)
+        return 1;
     loaded L;
     sc_raster_image img = { 0 };
     int rc = 1;
@@ -681,6 +684,9 @@ int sc_cmd_raster_check(int argc, char **argv)
         sc_cli_error(cmd, "needs a SCENE (try --help)");
         return 2;
     }
+    if (sc_cli_check_output(cmd, "--csv", csv) != 0 || sc_cli_check_output(cmd, "--pixels", pixels_path) != 0 ||
+        sc_cli_check_output(cmd, "--map", map) != 0 || sc_cli_check_output(cmd, "--overlay", overlay) != 0)
+        return 1;
 
     loaded L;
     sc_raster_image img = { 0 };

@@ -24,6 +24,13 @@ int sc_cmd_render(int argc, char **argv);
 void sc_cli_error(const char *command, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
+/* Checks, before any work is done, that an output file can be written:
+ * PATH is absent or a regular file, and its folder exists and accepts a new
+ * file (tried for real, so permissions, read-only mounts and root are all
+ * judged correctly). NULL passes. On failure prints one error line and
+ * returns -1, so a run never fails at its end after minutes of work. */
+int sc_cli_check_output(const char *command, const char *option, const char *path);
+
 /* Writes through a temporary file in the same directory and renames it into
  * place, so a failed or interrupted run never leaves a half-written output.
  * write_fn returns 0 on success. */

@@ -31,22 +31,46 @@ void sc_cli_error(const char *command, const char *fmt, ...)
     va_end(ap);
 }
 
-int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
+int sc_cli_check_output(const char *command, const char *option, const char *path)
 {
-    /* A device or pipe (-o /dev/null, /dev/stdout) is written in place:
-     * renaming a temporary file over it would replace the device node. */
+    if (!path)
+        return 0;
     struct stat st;
     if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        if (S_ISDIR(st.st_mode)) {
-            errno = EISDIR;
-            return -1;
-        }
-        FILE *f = fopen(path, "wb");
-        if (!f)
-            return -1;
-        int ok = write_fn(ctx, f) == 0;
-        ok = (fclose(f) == 0) && ok;
-        return ok ? 0 : -1;
+        sc_cli_error(command, "%s '%s': not a regular file", option, path);
+        return -1;
+    }
+    const char *slash = strrchr(path, '/');
+    size_t dlen = slash ? (size_t)(slash - path) : 1;
+    char *probe = malloc(dlen + 32);
+    if (!probe) {
+        sc_cli_error(command, "out of memory");
+        return -1;
+    }
+    if (slash)
+        snprintf(probe, dlen + 32, "%.*s/.spherecull-probe-XXXXXX", (int)(dlen ? dlen : 1), dlen ? path : "/");
+    else
+        snprintf(probe, dlen + 32, "./.spherecull-probe-XXXXXX");
+    int fd = mkstemp(probe);
+    if (fd < 0) {
+        sc_cli_error(command, "%s '%s': cannot write there: %s", option, path, strerror(errno));
+        free(probe);
+        return -1;
+    }
+    close(fd);
+    unlink(probe);
+    free(probe);
+    return 0;
+}
+
+int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
+{
+    /* Never rename over a device, pipe or directory (-o /dev/null would
+     * replace the device node): refuse any existing non-regular target. */
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        errno = S_ISDIR(st.st_mode) ? EISDIR : EINVAL;
+        return -1;
     }
     size_t len = strlen(path);
     char *tmp = malloc(len + 16);
