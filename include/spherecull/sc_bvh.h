@@ -68,6 +68,8 @@ typedef enum sc_prefilter_mode {
 typedef enum sc_tri_test {
     SC_TRI_WATERTIGHT = 0,   /* Woop, Benthin, Wald 2013; double fallback on zero edges */
     SC_TRI_MOLLER,           /* Moller-Trumbore 1997; not watertight, for comparison */
+    SC_TRI_EXACT,            /* exact decisions (hit/miss, t range, closest) with a float
+                                filter; see sc_trace.h */
     SC_TRI_TEST_COUNT
 } sc_tri_test;
 
@@ -123,7 +125,7 @@ sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32
 void sc_bvh_free(sc_bvh *bvh);
 sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 
-/* "off", "circum", "minimal", "auto"; "watertight", "moller";
+/* "off", "circum", "minimal", "auto"; "watertight", "moller", "exact";
  * "auto", "scalar", "avx2", "avx512". */
 const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
 sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);

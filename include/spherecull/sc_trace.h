@@ -16,6 +16,23 @@
  * boxes), so with the watertight triangle test a ray through a shared edge or
  * vertex of a closed mesh never slips through.
  *
+ * Triangle tests (sc_bvh_config.tri_test):
+ *   SC_TRI_WATERTIGHT  Woop, Benthin, Wald 2013. Watertight, but decided on a
+ *                      ray moved by float rounding: next to an edge or vertex
+ *                      it may report the neighbour, miss a touch, or hit a
+ *                      ray that misses by an ulp.
+ *   SC_TRI_EXACT       every decision is exact for the float ray and float
+ *                      vertices: hit/miss (signs of D.((P-O) x (Q-O)), both
+ *                      faces, edges and vertices included, a ray in the
+ *                      triangle's plane never hits), tmin <= t <= tmax, and
+ *                      the closest hit (smallest exact t = (A-O).n / D.n; of
+ *                      exact ties the first found). A float filter with
+ *                      rigorous error bounds decides almost every lane; the
+ *                      rest fall back to double and then to exact integer
+ *                      arithmetic (libc/libm only). t, u, v stay rounded.
+ *                      A few percent slower on ordinary rays.
+ *   SC_TRI_MOLLER      Moller-Trumbore 1997, not watertight, for comparison.
+ *
  * Statistics: pass a non-NULL sc_trace_stats to have the counters of this
  * ray ADDED to it (so one struct can sum a whole ray set). With NULL, a
  * separately compiled kernel without any counting runs: no cost.
@@ -55,7 +72,9 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded,
                        sc_trace_stats *stats);
 
 /* Brute force over all triangles with the BVH's own triangle test and
- * precision: no tree, for debugging and as a same-arithmetic cross-check. */
+ * precision: no tree, for debugging and as a same-arithmetic cross-check.
+ * (With SC_TRI_EXACT the decisions are the same as sc_trace_closest's; of
+ * exact ties another triangle may be reported.) */
 sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
 
 #ifdef __cplusplus

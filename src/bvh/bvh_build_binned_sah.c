@@ -651,7 +651,7 @@ sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info)
 /* ---- names -------------------------------------------------------------- */
 
 static const char *const mode_names[SC_PREFILTER_MODE_COUNT] = { "off", "circum", "minimal", "auto" };
-static const char *const test_names[SC_TRI_TEST_COUNT] = { "watertight", "moller" };
+static const char *const test_names[SC_TRI_TEST_COUNT] = { "watertight", "moller", "exact" };
 static const char *const isa_names[SC_TRACE_ISA_COUNT] = { "auto", "scalar", "avx2", "avx512" };
 
 static sc_status lookup(const char *const *names, int count, const char *name, int *out)

@@ -65,6 +65,7 @@ static void usage(FILE *f)
             "  --repeats R           paired repeats per measurement, median (default 5)\n"
             "  --isa ISA             auto|scalar|avx2|avx512 (default auto)\n"
             "  --embree MODE         default|robust: Embree scene flags (default default)\n"
+            "  --triangle TEST       watertight|moller|exact: our triangle test (default watertight)\n"
             "  --trav-cost C         SAH cost of a node visit relative to a leaf block test\n"
             "                        (default: the builder's, sc_bvh_config_default)\n");
 }
@@ -298,6 +299,7 @@ typedef struct bench_opts {
     sc_trace_isa isa;
     int embree_robust;
     float trav_cost;     /* < 0: the builder's default */
+    sc_tri_test tri;
     int cycles_fd;
 } bench_opts;
 
@@ -437,6 +439,7 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
             cfg.leaf_size = o->leaves[li];
             cfg.prefilter = (sc_prefilter_mode)o->modes[mi];
             cfg.isa = o->isa;
+            cfg.tri_test = o->tri;
             if (o->trav_cost >= 0)
                 cfg.traversal_cost = o->trav_cost;
             sc_bvh *b = NULL;
@@ -574,6 +577,7 @@ int sc_cmd_bench(int argc, char **argv)
     o.width = 512, o.height = 384, o.repeats = 5;
     o.isa = SC_TRACE_ISA_AUTO;
     o.trav_cost = -1;
+    o.tri = SC_TRI_WATERTIGHT;
     const char *csv_path = NULL;
     const char *scenes[64];
     int nscenes = 0;
@@ -637,6 +641,8 @@ int sc_cmd_bench(int argc, char **argv)
                 sc_cli_error(CMD, "ISA '%s' is not supported by this CPU", val);
                 return 2;
             }
+        } else if (strcmp(a, "--triangle") == 0) {
+            bad = sc_tri_test_from_name(val, &o.tri) != SC_OK;
         } else if (strcmp(a, "--trav-cost") == 0) {
             char *end;
             double c = strtod(val, &end);

@@ -31,6 +31,7 @@ static void help(FILE *f)
             "  --leaf N              triangles per BVH leaf, 1..%d (default 4)\n"
             "  --threads N           render threads (default: all)\n"
             "  --isa ISA             auto | scalar | avx2 | avx512 (default auto)\n"
+            "  --triangle TEST       watertight | moller | exact (default watertight)\n"
             "  --ao N                ambient-occlusion samples per pixel (default 0)\n"
             "  --seed S              seed for AO directions (default 1)\n"
             "  --no-shadows          skip shadow rays\n"
@@ -94,6 +95,7 @@ int sc_cmd_render(int argc, char **argv)
     int stats_on = 0, quiet = 0, shadows = 1;
     sc_prefilter_mode prefilter = SC_PREFILTER_AUTO;
     sc_trace_isa isa = SC_TRACE_ISA_AUTO;
+    sc_tri_test tri = SC_TRI_WATERTIGHT;
     sc_render_debug debug = SC_RENDER_SHADED;
 
     for (int i = 1; i < argc; i++) {
@@ -136,6 +138,12 @@ int sc_cmd_render(int argc, char **argv)
         } else if (!strcmp(a, "--isa")) {
             if (!val || sc_trace_isa_from_name(val, &isa) != SC_OK) {
                 sc_cli_error(CMD, "--isa takes auto, scalar, avx2 or avx512");
+                return 2;
+            }
+            i++;
+        } else if (!strcmp(a, "--triangle")) {
+            if (!val || sc_tri_test_from_name(val, &tri) != SC_OK) {
+                sc_cli_error(CMD, "--triangle takes watertight, moller or exact");
                 return 2;
             }
             i++;
@@ -225,6 +233,7 @@ int sc_cmd_render(int argc, char **argv)
     cfg.leaf_size = (int)leaf;
     cfg.prefilter = prefilter;
     cfg.isa = isa;
+    cfg.tri_test = tri;
     sc_bvh *bvh = NULL;
     st = sc_bvh_build(view.positions, view.num_vertices, view.indices, view.num_triangles, &cfg, &bvh);
     if (st != SC_OK) {

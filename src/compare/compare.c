@@ -29,7 +29,7 @@ typedef struct tracer_def {
     const char *name;
     family fam;
     int mode;          /* sc_prefilter_mode or sc_embree_mode */
-    int quality;       /* embree */
+    int quality;       /* embree: build quality; spherecull: sc_tri_test */
     int cluster;       /* embree user modes */
     int packet;        /* 0, 8 or 16 */
 } tracer_def;
@@ -37,6 +37,7 @@ typedef struct tracer_def {
 static const tracer_def all_tracers[] = {
 #ifdef SC_HAVE_TRACE
     { "spherecull-off", FAM_SPHERECULL, SC_PREFILTER_OFF, 0, 0, 0 },
+    { "spherecull-exact", FAM_SPHERECULL, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0 },
     { "spherecull-circum", FAM_SPHERECULL, SC_PREFILTER_CIRCUM, 0, 0, 0 },
     { "spherecull-minimal", FAM_SPHERECULL, SC_PREFILTER_MINIMAL, 0, 0, 0 },
     { "spherecull-auto", FAM_SPHERECULL, SC_PREFILTER_AUTO, 0, 0, 0 },
@@ -86,6 +87,7 @@ static sc_status tracer_build(tracer *t, const tracer_def *def, const sc_mesh_vi
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
         cfg.prefilter = (sc_prefilter_mode)def->mode;
+        cfg.tri_test = (sc_tri_test)def->quality;
         sc_bvh *b;
         sc_status st = sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &b);
         if (st != SC_OK)

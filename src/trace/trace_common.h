@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "bvh/bvh_internal.h"
+#include "exact_tri.h"
 
 /* Robust slab test in the spirit of Ize 2013, with one FMA per plane.
  * A slab distance is computed as t = fma(p, rd, -ord) with rd = fl(1/d) and
@@ -30,7 +31,11 @@
 #define SC_SLAB_DOWN (1.0f - 0x1p-21f)
 #define SC_SLAB_UP (1.0f + 0x1p-21f)
 /* Directions below this magnitude are replaced by it (with their sign), as
- * Embree does, so 1/d is finite and no slab distance is 0 * inf = NaN. */
+ * Embree does, so 1/d is finite and no slab distance is 0 * inf = NaN.
+ * That is not conservative for a ray (nearly) parallel to a slab that runs
+ * in or next to its plane: with d_y = 0 and o_y exactly on a box face the
+ * substituted ray leaves the slab at t = 0. Such rays ("parallel": some
+ * |d_k| < SC_MIN_RCP_INPUT) take the node test sc_slab_par below instead. */
 #define SC_MIN_RCP_INPUT 1e-18f
 /* |o| * 1/SC_MIN_RCP_INPUT must stay finite in float. */
 #define SC_MAX_ORIGIN 1e18f
@@ -41,9 +46,12 @@ static inline float sc_fmin(float a, float b) { return a < b ? a : b; }
 typedef struct sc_ray_pre {
     float org[3], dir[3], tmin, tmax;
     float rd[3], ord[3], slab_eps;
+    float rdp[3];                  /* 1/d in IEEE (+-inf for d = +-0): parallel rays only */
+    int parallel;
     int near_row[3], far_row[3];   /* rows of sc_bvh_node8.b */
     int kx, ky, kz;                /* watertight: kz = axis of largest |d| */
     float Sx, Sy, Sz;
+    float xK, xc0;                 /* exact test: edge bound E = xK (hP + hQ) + xc0 */
 } sc_ray_pre;
 
 static inline int sc_ray_valid(const sc_ray *r)
@@ -56,9 +64,18 @@ static inline int sc_ray_valid(const sc_ray *r)
     return r->tmin >= 0 && !isnan(r->tmax);
 }
 
+/* 1 iff the ray must take the parallel node test. */
+static inline int sc_ray_parallel(const sc_ray *r)
+{
+    return !(fabsf(r->dir[0]) >= SC_MIN_RCP_INPUT && fabsf(r->dir[1]) >= SC_MIN_RCP_INPUT &&
+             fabsf(r->dir[2]) >= SC_MIN_RCP_INPUT);
+}
+
 static inline void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p)
 {
+    p->parallel = sc_ray_parallel(r);
     for (int k = 0; k < 3; k++) {
+        p->rdp[k] = 1.0f / r->dir[k];
         p->org[k] = r->org[k];
         p->dir[k] = r->dir[k];
         float d = r->dir[k];
@@ -88,6 +105,51 @@ static inline void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p)
     p->Sx = d[kx] / d[kz];
     p->Sy = d[ky] / d[kz];
     p->Sz = 1.0f / d[kz];
+}
+
+/* The node test of parallel rays (Ize 2013 with IEEE infinities): a slab
+ * distance is (p - o) * (1/d) with 1/d = +-inf for d = +-0; a ray in the
+ * plane of a face gives 0 * inf = NaN, which the running max/min below
+ * ignore (max(a, b) = a > b ? a : b returns b when a is NaN, like (v)maxps),
+ * so the closed slab contains the ray, as it should. Rounding: the distance
+ * carries three roundings (difference, 1/d, product), within the 2^-21
+ * relative padding; SC_SLAB_PAR_EPS covers underflow. Empty slots
+ * (lo = +inf, hi = -inf) still give an empty interval. */
+#define SC_SLAB_PAR_EPS 0x1p-140f
+static inline unsigned sc_slab_par(const sc_ray_pre *p, const sc_bvh_node8 *node, float tmin, float tmax,
+                                   float *dist)
+{
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        float a = tmin, b = tmax;
+        for (int k = 0; k < 3; k++) {
+            float tn = (node->b[p->near_row[k]][i] - p->org[k]) * p->rdp[k];
+            float tf = (node->b[p->far_row[k]][i] - p->org[k]) * p->rdp[k];
+            a = sc_fmax(tn, a);
+            b = sc_fmin(tf, b);
+        }
+        a = fmaf(a, SC_SLAB_DOWN, -SC_SLAB_PAR_EPS);
+        b = fmaf(b, SC_SLAB_UP, SC_SLAB_PAR_EPS);
+        dist[i] = a;
+        mask |= (unsigned)(a <= b) << i;
+    }
+    return mask;
+}
+
+/* The exact test's per-ray bound constants (derivation in exact_tri.c):
+ * S bounds |P - O|_1 for every vertex P in the root box [lo, hi]. Computed
+ * in double and rounded up; an overflow to +inf only sends every lane to
+ * the double/exact path. */
+static inline void sc_ray_pre_exact(sc_ray_pre *p, const float lo[3], const float hi[3])
+{
+    double s = 0;
+    for (int k = 0; k < 3; k++) {
+        double a = fabs((double)lo[k] - p->org[k]), b = fabs((double)hi[k] - p->org[k]);
+        s += a > b ? a : b;
+    }
+    s *= 1 + 0x1p-10;
+    p->xK = (float)((6.1 * 0x1p-24 * s + 0x1p-149) * (1 + 0x1p-20));
+    p->xc0 = (float)((34 * 0x1p-48 * s * s + 0x1p-124) * (1 + 0x1p-20));
 }
 
 /* Woop et al. 2013, section 4: when an edge function is exactly zero in

@@ -3,7 +3,9 @@
  *   KATTR            the function attributes (target ISA)
  *   KCTX             per-ray broadcast state, filled by KFN(ctx_init)
  *   KFN(node_test)   8 child boxes -> hit mask + entry distances
- *   KFN(leaf_test)   one leaf block -> hit mask + t, barycentric numerators, denominators
+ *   KFN(leaf_test)   one leaf block -> hit mask + t, barycentric numerators, denominators;
+ *                    for SC_TRI_EXACT the mask of lanes left to sc_xresolve
+ *                    (exact_tri.h) and per lane the float t's error bound
  * and this file makes the kernel table KFN(sc_trace_kernels).
  *
  * One body serves closest/any and with/without statistics: the flags are
@@ -32,10 +34,15 @@ static inline __attribute__((always_inline)) void KFN(prefetch)(const sc_bvh *bv
 
 static inline __attribute__((always_inline)) KATTR int
 KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
-          const int ANY, const int STATS, const int MOLLER, const int OCT)
+          const int ANY, const int STATS, const int TEST, const int OCT)
 {
     sc_ray_pre p;
     sc_ray_precompute(ray, &p);
+    /* exact mode: tmax is the culling bound, a float >= the exact t of the
+     * closest hit so far (xb), which sc_xresolve chooses exactly */
+    sc_xhit xb;
+    xb.have = 0;
+    int xready = 0;           /* the edge-bound constants: computed at the first leaf */
     KCTX ctx;
     KFN(ctx_init)(&ctx, &p);
     const float tmin = ray->tmin;
@@ -57,7 +64,11 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
             if (STATS)
                 st->nodes++;
             float dist[SC_BVH_N] __attribute__((aligned(32)));
-            unsigned m = KFN(node_test)(&ctx, node, tmin, tmax, dist, OCT, !ANY);
+            /* OCT = -2: a parallel ray (trace_common.h); the counting
+             * kernels (OCT = -1) decide per ray */
+            unsigned m = OCT == -2 || (OCT == -1 && p.parallel)
+                             ? KFN(node_test_par)(&ctx, node, tmin, tmax, dist)
+                             : KFN(node_test)(&ctx, node, tmin, tmax, dist, OCT, !ANY);
             if (!m)
                 goto pop;
             if ((m & (m - 1)) == 0) {
@@ -98,10 +109,44 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
                 float un[16] __attribute__((aligned(64)));
                 float vn[16] __attribute__((aligned(64)));
                 float den[16] __attribute__((aligned(64)));
+                float te[16] __attribute__((aligned(64)));
                 if (STATS)
                     st->tri_tests += (uint64_t)__builtin_popcount(live);
-                unsigned hm = KFN(leaf_test)(&ctx, rows, W, live, tmin, tmax, MOLLER, t, un, vn, den);
-                if (hm) {
+                if (TEST == SC_TRI_EXACT && !xready) {
+                    sc_ray_pre_exact(&p, bvh->root_lo, bvh->root_hi);
+                    KFN(ctx_exact)(&ctx, &p);
+                    xready = 1;
+                }
+                unsigned hm = KFN(leaf_test)(&ctx, rows, W, live, tmin, tmax, TEST, t, te, un, vn, den);
+                if (TEST == SC_TRI_EXACT) {
+                    for (; hm; hm &= hm - 1) {
+                        unsigned i = (unsigned)__builtin_ctz(hm);
+                        int take;
+                        float lo, hi;
+                        if (te[i] >= 0 && sc_xfast(ray, t[i], te[i], &xb, &take, &lo, &hi)) {
+                            if (STATS)
+                                st->tri_hits++;
+                            if (ANY)
+                                return 1;
+                            if (take) {
+                                xb.have = 1, xb.refined = 0;
+                                xb.prim = ((const uint32_t *)(const void *)(rows + 9 * W))[i];
+                                xb.rows = rows, xb.W = W, xb.lane = i;
+                                xb.lo = lo, xb.hi = hi;
+                                xb.t = t[i], xb.u = un[i] * den[i], xb.v = vn[i] * den[i];
+                                tmax = hi;
+                            }
+                            continue;
+                        }
+                        unsigned nh = sc_xresolve(ray, rows, W, 1u << i, t, te, un, vn, den, ANY, &xb);
+                        if (STATS)
+                            st->tri_hits += nh;
+                        if (ANY && nh)
+                            return 1;
+                        if (!ANY && xb.have)
+                            tmax = xb.hi;
+                    }
+                } else if (hm) {
                     if (STATS)
                         st->tri_hits += (uint64_t)__builtin_popcount(hm);
                     if (ANY)
@@ -128,6 +173,14 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
         ref = stack[sp].ref;
     }
 done:
+    if (TEST == SC_TRI_EXACT && !ANY) {
+        sc_xhit_finish(ray, &xb);
+        hit->prim = xb.have ? xb.prim : SC_HITREC_MISS;
+        hit->t = xb.have ? xb.t : ray->tmax;
+        hit->u = xb.have ? xb.u : 0;
+        hit->v = xb.have ? xb.v : 0;
+        return 0;
+    }
     if (!ANY) {
         hit->prim = best_prim;
         hit->t = best_prim == SC_HITREC_MISS ? ray->tmax : tmax;
@@ -141,6 +194,9 @@ done:
  * the direction pick the near and far box planes at compile time); the
  * counting kernels keep one generic body. */
 #define SC_OCTANT_SWITCH(CALL)                                                                         \
+    if (sc_ray_parallel(r)) {                                                                          \
+        CALL(-2);                                                                                      \
+    } else                                                                                             \
     switch ((signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2) { \
     case 0: CALL(0); break;                                                                            \
     case 1: CALL(1); break;                                                                            \
@@ -152,7 +208,7 @@ done:
     default: CALL(7); break;                                                                           \
     }
 
-#define SC_DEFINE_KERNELS(TEST, MOLLER_FLAG)                                                           \
+#define SC_DEFINE_KERNELS(TEST, TEST_ID)                                                           \
     static KATTR void KFN(closest_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)              \
     {                                                                                                  \
         SC_OCTANT_SWITCH(SC_CALL_CLOSEST_##TEST)                                                       \
@@ -166,30 +222,37 @@ done:
     static KATTR void KFN(closest_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_hitrec *h,        \
                                                 sc_trace_stats *s)                                     \
     {                                                                                                  \
-        KFN(core)(b, r, h, s, 0, 1, MOLLER_FLAG, -1);                                                  \
+        KFN(core)(b, r, h, s, 0, 1, TEST_ID, -1);                                                  \
     }                                                                                                  \
     static KATTR int KFN(any_stats_##TEST)(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)        \
     {                                                                                                  \
-        return KFN(core)(b, r, NULL, s, 1, 1, MOLLER_FLAG, -1);                                        \
+        return KFN(core)(b, r, NULL, s, 1, 1, TEST_ID, -1);                                        \
     }
 
-#define SC_CALL_CLOSEST_watertight(O) KFN(core)(b, r, h, NULL, 0, 0, 0, O)
-#define SC_CALL_ANY_watertight(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, 0, O)
-#define SC_CALL_CLOSEST_moller(O) KFN(core)(b, r, h, NULL, 0, 0, 1, O)
-#define SC_CALL_ANY_moller(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, 1, O)
+#define SC_CALL_CLOSEST_watertight(O) KFN(core)(b, r, h, NULL, 0, 0, SC_TRI_WATERTIGHT, O)
+#define SC_CALL_ANY_watertight(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, SC_TRI_WATERTIGHT, O)
+#define SC_CALL_CLOSEST_moller(O) KFN(core)(b, r, h, NULL, 0, 0, SC_TRI_MOLLER, O)
+#define SC_CALL_ANY_moller(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, SC_TRI_MOLLER, O)
+#define SC_CALL_CLOSEST_exact(O) KFN(core)(b, r, h, NULL, 0, 0, SC_TRI_EXACT, O)
+#define SC_CALL_ANY_exact(O) res = KFN(core)(b, r, NULL, NULL, 1, 0, SC_TRI_EXACT, O)
 
-SC_DEFINE_KERNELS(watertight, 0)
-SC_DEFINE_KERNELS(moller, 1)
+SC_DEFINE_KERNELS(watertight, SC_TRI_WATERTIGHT)
+SC_DEFINE_KERNELS(moller, SC_TRI_MOLLER)
+SC_DEFINE_KERNELS(exact, SC_TRI_EXACT)
 #undef SC_DEFINE_KERNELS
 #undef SC_OCTANT_SWITCH
 #undef SC_CALL_CLOSEST_watertight
 #undef SC_CALL_ANY_watertight
 #undef SC_CALL_CLOSEST_moller
 #undef SC_CALL_ANY_moller
+#undef SC_CALL_CLOSEST_exact
+#undef SC_CALL_ANY_exact
 
 const sc_trace_kernels KFN(sc_trace_kernels)[SC_TRI_TEST_COUNT] = {
     [SC_TRI_WATERTIGHT] = { KFN(closest_watertight), KFN(any_watertight),
                             KFN(closest_stats_watertight), KFN(any_stats_watertight) },
     [SC_TRI_MOLLER] = { KFN(closest_moller), KFN(any_moller),
                         KFN(closest_stats_moller), KFN(any_stats_moller) },
+    [SC_TRI_EXACT] = { KFN(closest_exact), KFN(any_exact),
+                       KFN(closest_stats_exact), KFN(any_stats_exact) },
 };

@@ -9,6 +9,7 @@ typedef struct { const sc_ray_pre *p; } ctx_scalar;
 #define KCTX ctx_scalar
 
 static inline void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p) { c->p = p; }
+static inline void KFN(ctx_exact)(KCTX *c, const sc_ray_pre *p) { (void)c, (void)p; }
 
 static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,
                                       float *dist, const int OCT, const int WANT_DIST)
@@ -30,6 +31,12 @@ static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, f
         mask |= (unsigned)(a <= b) << i;
     }
     return mask;
+}
+
+static inline unsigned KFN(node_test_par)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,
+                                          float *dist)
+{
+    return sc_slab_par(c->p, node, tmin, tmax, dist);
 }
 
 /* Watertight test of one lane (Woop, Benthin, Wald 2013). */
@@ -70,6 +77,57 @@ static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsign
     return 1;
 }
 
+/* The float filter of the exact test (SC_TRI_EXACT): the watertight
+ * arithmetic plus the forward error bounds of exact_tri.h. Returns 0 for a
+ * certain miss (two edges of certainly opposite signs, or t certainly
+ * outside [tmin, tmax]); 1 leaves the lane to sc_xresolve, with te >= 0 and
+ * t, un, vn and den = 1/det set when all three edges are certain (inside),
+ * te = -1 otherwise. Every SIMD kernel computes the same bits. */
+static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i, float tmin,
+                             float tmax, float *t, float *te, float *un, float *vn, float *den)
+{
+    const int kx = p->kx, ky = p->ky, kz = p->kz;
+    float A[3], B[3], C[3];
+    for (int k = 0; k < 3; k++) {
+        A[k] = rows[(0 + k) * W + i] - p->org[k];
+        B[k] = rows[(3 + k) * W + i] - p->org[k];
+        C[k] = rows[(6 + k) * W + i] - p->org[k];
+    }
+    float Ax = A[kx] - p->Sx * A[kz], Ay = A[ky] - p->Sy * A[kz];
+    float Bx = B[kx] - p->Sx * B[kz], By = B[ky] - p->Sy * B[kz];
+    float Cx = C[kx] - p->Sx * C[kz], Cy = C[ky] - p->Sy * C[kz];
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float Wf = Bx * Ay - By * Ax;
+    float hA = fabsf(Ax) + fabsf(Ay), hB = fabsf(Bx) + fabsf(By), hC = fabsf(Cx) + fabsf(Cy);
+    float EU = fmaf(p->xK, hB + hC, p->xc0);
+    float EV = fmaf(p->xK, hA + hC, p->xc0);
+    float EW = fmaf(p->xK, hA + hB, p->xc0);
+    int pU = U > EU, pV = V > EV, pW = Wf > EW;
+    int nU = U < -EU, nV = V < -EV, nW = Wf < -EW;
+    *te = -1;
+    if ((pU | pV | pW) & (nU | nV | nW))
+        return 0;
+    if (!((pU & pV & pW) | (nU & nV & nW)))
+        return 1;
+    float Az = p->Sz * A[kz], Bz = p->Sz * B[kz], Cz = p->Sz * C[kz];
+    float det = (U + V) + Wf;
+    float T = (U * Az + V * Bz) + Wf * Cz;
+    float inv = 1.0f / det;
+    float tt = T * inv;
+    float E = (EU + EV) + EW;
+    float zmax = sc_fmax(sc_fmax(Az, Bz), Cz), zmin = sc_fmin(sc_fmin(Az, Bz), Cz);
+    float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
+    float q = fmaf(R, E * SC_X_K202, SC_X_FLOOR_N);
+    float e = fmaf(q, fabsf(inv), fmaf(Z, SC_X_K15U, fmaf(fabsf(tt), SC_X_K3U, SC_X_FLOOR_T)));
+    if (!(e < INFINITY))
+        return 1;
+    if (tt - e > tmax || tt + e < tmin)
+        return 0;
+    *t = tt, *te = e, *un = V, *vn = Wf, *den = inv;
+    return 1;
+}
+
 /* Moller-Trumbore 1997, both faces. */
 static inline int lane_moller(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
                               float tmin, float tmax, float *t, float *un, float *vn, float *den)
@@ -101,14 +159,16 @@ static inline int lane_moller(const sc_ray_pre *p, const float *rows, unsigned W
 }
 
 static inline unsigned KFN(leaf_test)(const KCTX *c, const float *rows, unsigned W, unsigned live,
-                                      float tmin, float tmax, int moller, float *t, float *un,
+                                      float tmin, float tmax, int test, float *t, float *te, float *un,
                                       float *vn, float *den)
 {
     unsigned hm = 0;
     for (unsigned m = live; m; m &= m - 1) {
         unsigned i = (unsigned)__builtin_ctz(m);
-        int h = moller ? lane_moller(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i])
-                       : lane_watertight(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i]);
+        int h = test == SC_TRI_MOLLER ? lane_moller(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i])
+                : test == SC_TRI_EXACT
+                    ? lane_exact(c->p, rows, W, i, tmin, tmax, &t[i], &te[i], &un[i], &vn[i], &den[i])
+                    : lane_watertight(c->p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i]);
         hm |= (unsigned)h << i;
     }
     return hm;
@@ -131,7 +191,10 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
     hit->u = hit->v = 0;
     if (!bvh->has_root)
         return SC_OK;
-    const int moller = bvh->cfg.tri_test == SC_TRI_MOLLER;
+    const int test = bvh->cfg.tri_test;
+    sc_xhit xb;
+    xb.have = 0;
+    sc_ray_pre_exact(&p, bvh->root_lo, bvh->root_hi);
     for (size_t ni = 0; ni < bvh->node_count; ni++) {
         const sc_bvh_node8 *node = &bvh->nodes[ni];
         for (int s = 0; s < SC_BVH_N; s++) {
@@ -142,10 +205,22 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
             const float *rows = (const float *)(const void *)(bvh->leaves + sc_ref_offset(ref));
             if (sc_ref_has_spheres(ref))
                 rows += 4 * W;
-            float t[16], un[16], vn[16], den[16];
-            unsigned hm = leaf_test_scalar(&c, rows, W, (1u << n) - 1, ray->tmin, tmax, moller, t, un, vn, den);
+            float t[16], te[16], un[16], vn[16], den[16];
+            unsigned hm = leaf_test_scalar(&c, rows, W, (1u << n) - 1, ray->tmin, tmax, test, t, te, un, vn, den);
             if (!hm)
                 continue;
+            if (test == SC_TRI_EXACT) {
+                sc_xresolve(ray, rows, W, hm, t, te, un, vn, den, 0, &xb);
+                if (xb.have) {
+                    tmax = xb.hi;
+                    sc_xhit_finish(ray, &xb);
+                    hit->prim = xb.prim;
+                    hit->t = xb.t;
+                    hit->u = xb.u;
+                    hit->v = xb.v;
+                }
+                continue;
+            }
             int bi = __builtin_ctz(hm);
             for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
                 int i = __builtin_ctz(rest);

@@ -8,6 +8,8 @@ typedef struct {
     __m256 ord[3], rd[3], eps;
     size_t near_off[3], far_off[3];      /* byte offsets of rows in a node */
     __m256 okx, oky, okz, Sx, Sy, Sz, tmin;   /* broadcast once per ray, not per leaf */
+    __m256 xK, xc0;                           /* exact test's edge bound */
+    __m256 org[3], rdp[3];                    /* parallel rays' node test */
     float org_s[3], dir_s[3];
     int kx, ky, kz;
 } KFN(ctx);
@@ -21,6 +23,8 @@ static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
         c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
         c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
         c->org_s[k] = p->org[k];
+        c->org[k] = _mm256_set1_ps(p->org[k]);
+        c->rdp[k] = _mm256_set1_ps(p->rdp[k]);
         c->dir_s[k] = p->dir[k];
     }
     c->eps = _mm256_set1_ps(p->slab_eps);
@@ -32,6 +36,12 @@ static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
     c->Sy = _mm256_set1_ps(p->Sy);
     c->Sz = _mm256_set1_ps(p->Sz);
     c->tmin = _mm256_set1_ps(p->tmin);
+}
+
+static inline KATTR void KFN(ctx_exact)(KCTX *c, const sc_ray_pre *p)
+{
+    c->xK = _mm256_set1_ps(p->xK);
+    c->xc0 = _mm256_set1_ps(p->xc0);
 }
 
 static inline __attribute__((always_inline)) KATTR unsigned
@@ -64,6 +74,30 @@ KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, 
     return (unsigned)_mm256_cmp_ps_mask(tn, tf, _CMP_LE_OQ);
 #else
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
+#endif
+}
+
+/* sc_slab_par on 8 children: (v)maxps/(v)minps return the second operand
+ * when the first is NaN, as sc_fmax/sc_fmin do. */
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(node_test_par)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, float *dist)
+{
+    const char *nb = (const char *)node;
+    __m256 a = c->tmin, b = _mm256_set1_ps(tmax);
+    (void)tmin;
+    for (int k = 0; k < 3; k++) {
+        __m256 n = _mm256_load_ps((const float *)(const void *)(nb + c->near_off[k]));
+        __m256 f = _mm256_load_ps((const float *)(const void *)(nb + c->far_off[k]));
+        a = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(n, c->org[k]), c->rdp[k]), a);
+        b = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(f, c->org[k]), c->rdp[k]), b);
+    }
+    a = _mm256_fmsub_ps(a, _mm256_set1_ps(SC_SLAB_DOWN), _mm256_set1_ps(SC_SLAB_PAR_EPS));
+    b = _mm256_fmadd_ps(b, _mm256_set1_ps(SC_SLAB_UP), _mm256_set1_ps(SC_SLAB_PAR_EPS));
+    _mm256_store_ps(dist, a);
+#if SC_X86_AVX512
+    return (unsigned)_mm256_cmp_ps_mask(a, b, _CMP_LE_OQ);
+#else
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ));
 #endif
 }
 
@@ -150,6 +184,93 @@ KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsig
     return hm;
 }
 
+/* The exact test's float filter on 8 lanes, the operations of lane_exact:
+ * returns the lanes left to sc_xresolve; te = -1 where the edges are not
+ * all certain. */
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(exact8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
+            float tmin, float tmax, float *t, float *te, float *un, float *vn, float *den)
+{
+    const int kx = c->kx, ky = c->ky, kz = c->kz;
+    const __m256 okx = c->okx, oky = c->oky, okz = c->okz;
+    const __m256 Sx = c->Sx, Sy = c->Sy, Sz = c->Sz;
+#define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
+    __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
+    __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
+    __m256 Ckz = _mm256_sub_ps(LD(2, kz), okz);
+    __m256 Ax = _mm256_sub_ps(_mm256_sub_ps(LD(0, kx), okx), _mm256_mul_ps(Sx, Akz));
+    __m256 Ay = _mm256_sub_ps(_mm256_sub_ps(LD(0, ky), oky), _mm256_mul_ps(Sy, Akz));
+    __m256 Bx = _mm256_sub_ps(_mm256_sub_ps(LD(1, kx), okx), _mm256_mul_ps(Sx, Bkz));
+    __m256 By = _mm256_sub_ps(_mm256_sub_ps(LD(1, ky), oky), _mm256_mul_ps(Sy, Bkz));
+    __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(2, kx), okx), _mm256_mul_ps(Sx, Ckz));
+    __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(2, ky), oky), _mm256_mul_ps(Sy, Ckz));
+#undef LD
+    __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
+    __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
+    __m256 Wv = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+    const __m256 sgn = _mm256_set1_ps(-0.0f);
+#define ABS(x) _mm256_andnot_ps(sgn, (x))
+    __m256 hA = _mm256_add_ps(ABS(Ax), ABS(Ay));
+    __m256 hB = _mm256_add_ps(ABS(Bx), ABS(By));
+    __m256 hC = _mm256_add_ps(ABS(Cx), ABS(Cy));
+    __m256 EU = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hB, hC), c->xc0);
+    __m256 EV = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hA, hC), c->xc0);
+    __m256 EW = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hA, hB), c->xc0);
+#if SC_X86_AVX512
+    __mmask8 pU = _mm256_cmp_ps_mask(U, EU, _CMP_GT_OQ), nU = _mm256_cmp_ps_mask(U, _mm256_xor_ps(EU, sgn), _CMP_LT_OQ);
+    __mmask8 pV = _mm256_cmp_ps_mask(V, EV, _CMP_GT_OQ), nV = _mm256_cmp_ps_mask(V, _mm256_xor_ps(EV, sgn), _CMP_LT_OQ);
+    __mmask8 pW = _mm256_cmp_ps_mask(Wv, EW, _CMP_GT_OQ), nW = _mm256_cmp_ps_mask(Wv, _mm256_xor_ps(EW, sgn), _CMP_LT_OQ);
+    unsigned miss = (unsigned)((pU | pV | pW) & (nU | nV | nW));
+    unsigned inside = (unsigned)((pU & pV & pW) | (nU & nV & nW));
+#else
+    __m256 pU = _mm256_cmp_ps(U, EU, _CMP_GT_OQ), nU = _mm256_cmp_ps(U, _mm256_xor_ps(EU, sgn), _CMP_LT_OQ);
+    __m256 pV = _mm256_cmp_ps(V, EV, _CMP_GT_OQ), nV = _mm256_cmp_ps(V, _mm256_xor_ps(EV, sgn), _CMP_LT_OQ);
+    __m256 pW = _mm256_cmp_ps(Wv, EW, _CMP_GT_OQ), nW = _mm256_cmp_ps(Wv, _mm256_xor_ps(EW, sgn), _CMP_LT_OQ);
+    unsigned miss = KFN(mask8)(_mm256_and_ps(_mm256_or_ps(_mm256_or_ps(pU, pV), pW),
+                                             _mm256_or_ps(_mm256_or_ps(nU, nV), nW)));
+    unsigned inside = KFN(mask8)(_mm256_or_ps(_mm256_and_ps(_mm256_and_ps(pU, pV), pW),
+                                              _mm256_and_ps(_mm256_and_ps(nU, nV), nW)));
+#endif
+    live &= ~miss;
+    unsigned open = live & ~inside;
+    unsigned in = live & inside;
+    unsigned sure = 0;
+    if (in) {
+        __m256 Az = _mm256_mul_ps(Sz, Akz), Bz = _mm256_mul_ps(Sz, Bkz), Cz = _mm256_mul_ps(Sz, Ckz);
+        __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), Wv);
+        __m256 T = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, Az), _mm256_mul_ps(V, Bz)), _mm256_mul_ps(Wv, Cz));
+        /* one division: tt and the bound both use 1/det */
+        __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
+        __m256 tt = _mm256_mul_ps(T, inv);
+        __m256 E = _mm256_add_ps(_mm256_add_ps(EU, EV), EW);
+        __m256 zmax = _mm256_max_ps(_mm256_max_ps(Az, Bz), Cz), zmin = _mm256_min_ps(_mm256_min_ps(Az, Bz), Cz);
+        __m256 Z = _mm256_max_ps(zmax, _mm256_xor_ps(zmin, sgn));
+        __m256 R = _mm256_mul_ps(_mm256_sub_ps(zmax, zmin), _mm256_set1_ps(0.5f));
+        __m256 q = _mm256_fmadd_ps(R, _mm256_mul_ps(E, _mm256_set1_ps(SC_X_K202)), _mm256_set1_ps(SC_X_FLOOR_N));
+        __m256 e = _mm256_fmadd_ps(q, ABS(inv),
+                                   _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_X_K15U),
+                                                   _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_X_K3U),
+                                                                   _mm256_set1_ps(SC_X_FLOOR_T))));
+        unsigned fin = KFN(mask8)(_mm256_cmp_ps(e, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+        unsigned out = KFN(mask8)(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(tt, e), _mm256_set1_ps(tmax), _CMP_GT_OQ),
+                                               _mm256_cmp_ps(_mm256_add_ps(tt, e), _mm256_set1_ps(tmin), _CMP_LT_OQ)));
+        open |= in & ~fin;
+        sure = in & fin & ~out;
+        if (sure) {
+            _mm256_storeu_ps(t + h, tt);
+            _mm256_storeu_ps(te + h, e);
+            _mm256_storeu_ps(un + h, V);
+            _mm256_storeu_ps(vn + h, Wv);
+            _mm256_storeu_ps(den + h, inv);
+        }
+    }
+#undef ABS
+    /* te = -1 marks the lanes whose edges sc_xresolve must settle */
+    for (unsigned m = open; m; m &= m - 1)
+        te[h + (unsigned)__builtin_ctz(m)] = -1;
+    return sure | open;
+}
+
 /* Moller-Trumbore on 8 lanes, the operations of lane_moller. */
 static inline __attribute__((always_inline)) KATTR unsigned
 KFN(moller8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
@@ -200,10 +321,14 @@ KFN(moller8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned 
 
 static inline __attribute__((always_inline)) KATTR unsigned
 KFN(leaf_test)(const KCTX *c, const float *rows, unsigned W, unsigned live, float tmin, float tmax,
-               int moller, float *t, float *un, float *vn, float *den)
+               int test, float *t, float *te, float *un, float *vn, float *den)
 {
     unsigned hm;
-    if (moller) {
+    if (test == SC_TRI_EXACT) {
+        hm = KFN(exact8)(c, rows, W, 0, live & 0xff, tmin, tmax, t, te, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= KFN(exact8)(c, rows, W, 8, live >> 8, tmin, tmax, t, te, un, vn, den) << 8;
+    } else if (test == SC_TRI_MOLLER) {
         hm = KFN(moller8)(c, rows, W, 0, live & 0xff, tmin, tmax, t, un, vn, den);
         if (W == 16 && (live >> 8))
             hm |= KFN(moller8)(c, rows, W, 8, live >> 8, tmin, tmax, t, un, vn, den) << 8;

@@ -1,0 +1,115 @@
+/* The exact-decision triangle test (SC_TRI_EXACT): the SIMD kernels run the
+ * float Woop et al. test together with a rigorous forward error bound; a
+ * lane whose edge functions are all farther from zero than their bounds,
+ * and whose t is certainly outside the current range, is decided there.
+ * Every other lane of a leaf comes here, in lane order:
+ *
+ *   1. a double-precision filter (edge volumes with error bounds, a t
+ *      interval from the barycentric form of t);
+ *   2. where that cannot decide, exact integer arithmetic: every predicate is
+ *      a sum of signed products of three floats, and a product of three
+ *      float significands (72 bits, unsigned __int128) times a power of two
+ *      is added into a fixed-point accumulator (two's complement, 2^-447
+ *      units), so the sign is exact. The comparison of two t = num/den is
+ *      the sign of num1 den2 - num2 den1, exact with a schoolbook multiply.
+ *
+ * The predicates are the oracle's (src/reference/ref_ray.c): with
+ * a = A-O, b = B-O, c = C-O, the ray meets the triangle iff the volumes
+ * D.(b x c), D.(c x a), D.(a x b) have no two opposite signs and their sum
+ * D.n is non-zero (both faces, edges and vertices included, a ray in the
+ * triangle's plane never hits); t = a.n / D.n must satisfy tmin <= t <= tmax
+ * exactly; the first hit is the smallest exact t, and of exact ties the one
+ * found first is kept (all of them are in the oracle's tie set).
+ * libc and libm only.
+ */
+#ifndef SPHERECULL_TRACE_EXACT_TRI_H
+#define SPHERECULL_TRACE_EXACT_TRI_H
+
+#include <math.h>
+#include <stdint.h>
+
+#include "spherecull/sc_rays.h"
+
+/* The ray as given (not the precomputed, clamped copy the box tests use). */
+typedef sc_ray sc_xray;
+
+/* One accepted hit, or the current closest. lo <= exact t <= hi always. */
+typedef struct sc_xhit {
+    int have;
+    int refined;            /* lo, hi come from the double filter (tighter) */
+    uint32_t prim;
+    const float *rows;      /* the triangle: lane `lane` of a leaf block of width W */
+    unsigned W, lane;
+    float lo, hi;
+    float t, u, v;          /* reported: t (in [tmin, tmax]) and barycentrics */
+} sc_xhit;
+
+/* The float filter of the scalar and SIMD kernels (u = 2^-24): with the
+ * sheared float coordinates Px, Py of a vertex P, h = |Px| + |Py|, an edge
+ * function over vertices P, Q is certain iff its magnitude exceeds
+ *   E = K (hP + hQ) + c0,
+ * K and c0 per ray from S >= the largest L1 distance of the BVH's root box
+ * from the origin (sc_ray_pre_exact), and on a lane with three certain
+ * edges of one sign t = T fl(1/det) is within
+ *   te = (R * SC_X_K202 * (E1+E2+E3) + SC_X_FLOOR_N) |fl(1/det)|
+ *        + Z * SC_X_K15U + |t| * SC_X_K3U + SC_X_FLOOR_T
+ * of the exact t, with zi = Sz z_i (the vertices' t along the ray),
+ * Z = max |zi| and R = (max zi - min zi) / 2 (the spread: barycentric
+ * errors sum to zero, so they only move t within the triangle's depth).
+ * The derivation is in exact_tri.c. */
+#define SC_X_K202 (2.02f)
+#define SC_X_FLOOR_N (0x1p-146f)
+#define SC_X_K15U (15.0f * 0x1p-24f)
+#define SC_X_K3U (3.0f * 0x1p-24f)
+#define SC_X_FLOOR_T (0x1p-120f)
+
+/* The common case, inline in the kernels: a lane whose float filter
+ * certified the edges (te >= 0). Since te >= 3u|t|, fl(t - 2te) <= t - te
+ * and fl(t + 2te) >= t + te, so [lo, hi] below holds the exact t. Returns 1
+ * when that decides the lane (*take: it is the new closest), 0 when
+ * sc_xresolve must (a range or order too close to call in float). */
+static inline int sc_xfast(const sc_xray *r, float t, float te, const sc_xhit *best, int *take, float *lo,
+                           float *hi)
+{
+    float L = t - 2 * te, H = t + 2 * te;
+    if (!(L >= r->tmin && H <= r->tmax))
+        return 0;
+    *lo = L, *hi = H;
+    if (!best->have || H < best->lo) {
+        *take = 1;
+        return 1;
+    }
+    *take = 0;
+    return L > best->hi;
+}
+
+/* Settles the candidate lanes `cand` of one leaf block (vertex rows as in
+ * bvh_internal.h, width W). Per lane, te[i] >= 0 means the float filter
+ * certified the edges (all inside) and |t[i] - exact t| <= te[i], with
+ * un/vn its barycentric numerators and den = 1/det; te[i] < 0 means
+ * undecided. With
+ * any != 0 returns 1 at the first exact hit in [tmin, tmax]; otherwise
+ * updates *best and returns the number of exact hits in [tmin, tmax]. */
+__attribute__((cold)) unsigned sc_xresolve(const sc_xray *r, const float *rows, unsigned W, unsigned cand, const float *t,
+                     const float *te, const float *un, const float *vn, const float *den, int any,
+                     sc_xhit *best);
+
+/* The float t of a certified lane can be far from the exact one when the
+ * ray grazes the triangle (wide [lo, hi]); then the reported t, u, v are
+ * recomputed in double. Called once per ray on the final closest hit. */
+__attribute__((cold)) void sc_xhit_report(const sc_xray *r, sc_xhit *best);
+static inline void sc_xhit_finish(const sc_xray *r, sc_xhit *best)
+{
+    if (best->have && !(best->hi - best->lo <= 0x1p-12f * fabsf(best->t)))
+        sc_xhit_report(r, best);
+}
+
+/* Exact primitives, exposed for the tests. v = A, B, C (9 floats). */
+/* sign of D.((P-O) x (Q-O)) */
+int sc_x_vol_sign(const sc_xray *r, const float P[3], const float Q[3]);
+/* 1 iff the ray hits the triangle in [tmin, tmax] (the oracle's rule) */
+int sc_x_hit_exact(const sc_xray *r, const float v[9]);
+/* sign of t(a) - t(b) for two triangles whose planes the ray crosses */
+int sc_x_cmp_t_exact(const sc_xray *r, const float a[9], const float b[9]);
+
+#endif
