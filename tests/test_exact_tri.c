@@ -38,6 +38,8 @@
 #include "spherecull/sc_trace.h"
 #include "trace/exact_tri.h"
 
+#include "sc_test_meshes.h"
+
 static const int LEAVES[] = { 1, 4, 16 };
 
 /* ---- MPFR references ------------------------------------------------------ */
@@ -320,51 +322,6 @@ static void test_tiny_scenes(void **state)
 
 /* ---- meshes against the oracle -------------------------------------------- */
 
-typedef struct mesh {
-    float *pos;
-    uint32_t *idx;
-    uint32_t nv, nt;
-} mesh;
-
-static void mesh_free(mesh *m)
-{
-    free(m->pos), free(m->idx);
-    memset(m, 0, sizeof *m);
-}
-
-static void place(double p[3], const double off[3], double scale)
-{
-    const double c1 = cos(0.7), s1 = sin(0.7), c2 = cos(1.1), s2 = sin(1.1);
-    double x = c1 * p[0] - s1 * p[1], y = s1 * p[0] + c1 * p[1], z = p[2];
-    p[0] = scale * x + off[0];
-    p[1] = scale * (c2 * y - s2 * z) + off[1];
-    p[2] = scale * (s2 * y + c2 * z) + off[2];
-}
-
-static void torus(mesh *m, int nu, int nv, const double off[3], double scale)
-{
-    m->nv = (uint32_t)(nu * nv), m->nt = (uint32_t)(2 * nu * nv);
-    m->pos = malloc(3 * (size_t)m->nv * sizeof *m->pos);
-    m->idx = malloc(3 * (size_t)m->nt * sizeof *m->idx);
-    for (int i = 0; i < nu; i++)
-        for (int j = 0; j < nv; j++) {
-            double u = 6.283185307179586 * i / nu, v = 6.283185307179586 * j / nv;
-            double p[3] = { (1 + 0.35 * cos(v)) * cos(u), (1 + 0.35 * cos(v)) * sin(u), 0.35 * sin(v) };
-            place(p, off, scale);
-            for (int k = 0; k < 3; k++)
-                m->pos[3 * (size_t)(i * nv + j) + k] = (float)p[k];
-        }
-    size_t t = 0;
-    for (int i = 0; i < nu; i++)
-        for (int j = 0; j < nv; j++) {
-            uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j),
-                     c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
-            const uint32_t q[6] = { a, b, c, a, c, d };
-            memcpy(m->idx + 3 * t, q, sizeof q);
-            t += 2;
-        }
-}
-
 static void from_proc(mesh *m, sc_proc_mesh *pm, const double off[3], double scale)
 {
     m->nv = pm->vertex_count, m->nt = pm->triangle_count;
@@ -375,46 +332,6 @@ static void from_proc(mesh *m, sc_proc_mesh *pm, const double off[3], double sca
         for (int k = 0; k < 3; k++)
             m->pos[3 * v + k] = (float)p[k];
     }
-}
-
-/* An axis-aligned box of n^3 cells with integer vertices: exactly zero edge
- * functions everywhere for lattice rays (the exact path's bread and butter). */
-static void lattice_box(mesh *m, int n)
-{
-    int s = n + 1;
-    uint32_t *id = malloc((size_t)s * s * s * sizeof *id);
-    m->nv = 0, m->nt = (uint32_t)(12 * n * n);
-    m->pos = malloc(3 * (size_t)s * s * s * sizeof *m->pos);
-    m->idx = malloc(3 * (size_t)m->nt * sizeof *m->idx);
-    for (int i = 0; i < s; i++)
-        for (int j = 0; j < s; j++)
-            for (int k = 0; k < s; k++) {
-                size_t gi = ((size_t)i * s + j) * s + k;
-                id[gi] = UINT32_MAX;
-                if (i && j && k && i < n && j < n && k < n)
-                    continue;
-                m->pos[3 * (size_t)m->nv] = (float)i;
-                m->pos[3 * (size_t)m->nv + 1] = (float)j;
-                m->pos[3 * (size_t)m->nv + 2] = (float)k;
-                id[gi] = m->nv++;
-            }
-    size_t t = 0;
-    for (int axis = 0; axis < 3; axis++)
-        for (int side = 0; side <= n; side += n)
-            for (int u = 0; u < n; u++)
-                for (int v = 0; v < n; v++) {
-                    uint32_t w[4];
-                    const int du[4] = { 0, 1, 1, 0 }, dv[4] = { 0, 0, 1, 1 };
-                    for (int q = 0; q < 4; q++) {
-                        int c[3];
-                        c[axis] = side, c[(axis + 1) % 3] = u + du[q], c[(axis + 2) % 3] = v + dv[q];
-                        w[q] = id[((size_t)c[0] * s + c[1]) * s + c[2]];
-                    }
-                    const uint32_t t0[3] = { w[0], w[1], w[2] }, t1[3] = { w[0], w[2], w[3] };
-                    memcpy(m->idx + 3 * t++, t0, sizeof t0);
-                    memcpy(m->idx + 3 * t++, t1, sizeof t1);
-                }
-    free(id);
 }
 
 /* Rays between lattice points of the box (axis-aligned, face and space
@@ -625,7 +542,7 @@ static void test_lattice(void **state)
 {
     (void)state;
     mesh m;
-    lattice_box(&m, 6);
+    grid_box(&m, 6, 1);    /* integer vertices: exactly zero edge functions for lattice rays */
     sc_mesh_view v = { m.pos, m.nv, m.idx, m.nt };
     size_t n = 6000;
     sc_ray *rays = malloc(n * sizeof *rays);
@@ -644,45 +561,29 @@ static void test_not_vacuous(void **state)
 
 /* ---- the shared scenes ----------------------------------------------------- */
 
+/* the adversarial set `spherecull compare` uses (65536 rays, seed 1), an
+ * even stride of 2000 of them */
+static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
+{
+    (void)ctx;
+    sc_rayset set;
+    assert_int_equal(sc_rayset_adversarial(m, 65536, 1, &set), SC_OK);
+    size_t ns = 2000;
+    sc_ray *sr = malloc(ns * sizeof *sr);
+    for (size_t s = 0; s < ns; s++)
+        sr[s] = set.rays[(size_t)((double)s * set.count / ns)];
+    char label[64];
+    snprintf(label, sizeof label, "%s adversarial", name);
+    run_rays(label, m, sr, ns, 0);
+    free(sr);
+    sc_rayset_free(&set);
+}
+
 static void test_shared_scenes(void **state)
 {
     (void)state;
-    const char *dir = getenv("SC_TEST_SCENES");
-    const char *names[] = { "bunny.obj", "fandisk.obj", "armadillo.obj", "dragon_100k.ply" };
-    int ran = 0;
-    for (size_t f = 0; f < sizeof names / sizeof names[0]; f++) {
-        char path[1024];
-        snprintf(path, sizeof path, "%s/%s", dir ? dir : "", names[f]);
-        FILE *fp = dir ? fopen(path, "rb") : NULL;
-        if (!fp)
-            continue;
-        fclose(fp);
-        sc_scene *scene;
-        char err[256];
-        assert_int_equal(sc_scene_load(path, NULL, &scene, err, sizeof err), SC_OK);
-        sc_scene_view v;
-        assert_int_equal(sc_scene_get_view(scene, &v), SC_OK);
-        sc_mesh_view m = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
-        /* the adversarial set `spherecull compare` uses (65536 rays, seed
-         * 1), an even stride of 2000 of them */
-        sc_rayset set;
-        assert_int_equal(sc_rayset_adversarial(&m, 65536, 1, &set), SC_OK);
-        size_t ns = 2000;
-        sc_ray *sr = malloc(ns * sizeof *sr);
-        for (size_t s = 0; s < ns; s++)
-            sr[s] = set.rays[(size_t)((double)s * set.count / ns)];
-        char label[64];
-        snprintf(label, sizeof label, "%s adversarial", names[f]);
-        run_rays(label, &m, sr, ns, 0);
-        free(sr);
-        sc_rayset_free(&set);
-        sc_scene_free(scene);
-        ran++;
-    }
-    if (!ran) {
-        print_message("no shared scenes in '%s': skipped\n", dir ? dir : "(SC_TEST_SCENES unset)");
-        skip();
-    }
+    const char *const names[] = { "bunny.obj", "fandisk.obj", "armadillo.obj", "dragon_100k.ply" };
+    each_shared_scene(names, sizeof names / sizeof names[0], shared_scene, NULL);
 }
 
 int main(void)

@@ -41,6 +41,8 @@
 #include "spherecull/sc_trace.h"
 #include "trace/trace_common.h"
 
+#include "sc_test_meshes.h"
+
 /* ---- hand-built configurations ------------------------------------------- */
 
 /* Octahedron |x|+|y|+|z| <= 1 (tris 0..7, outward) and a floor z = -5 of
@@ -308,54 +310,6 @@ static void test_fan_mixed_fallback(void **state)
 
 /* ---- procedural closed meshes -------------------------------------------- */
 
-typedef struct mesh {
-    float *pos;
-    uint32_t *idx;
-    uint32_t nv, nt;
-} mesh;
-
-static void mesh_free(mesh *m)
-{
-    free(m->pos), free(m->idx);
-    memset(m, 0, sizeof *m);
-}
-
-/* A fixed rotation and an offset, so no coordinate is round and no edge is
- * axis-aligned: float rounding of the vertices relative to the origin bites. */
-static void place(double p[3], const double off[3])
-{
-    const double c1 = cos(0.7), s1 = sin(0.7), c2 = cos(1.1), s2 = sin(1.1);
-    double x = c1 * p[0] - s1 * p[1], y = s1 * p[0] + c1 * p[1], z = p[2];
-    p[0] = x + off[0];
-    p[1] = c2 * y - s2 * z + off[1];
-    p[2] = s2 * y + c2 * z + off[2];
-}
-
-static void torus(mesh *m, int nu, int nv)
-{
-    m->nv = (uint32_t)(nu * nv), m->nt = (uint32_t)(2 * nu * nv);
-    m->pos = malloc(3 * (size_t)m->nv * sizeof *m->pos);
-    m->idx = malloc(3 * (size_t)m->nt * sizeof *m->idx);
-    const double off[3] = { 3.1, -1.7, 0.45 };
-    for (int i = 0; i < nu; i++)
-        for (int j = 0; j < nv; j++) {
-            double u = 6.283185307179586 * i / nu, v = 6.283185307179586 * j / nv;
-            double p[3] = { (1 + 0.35 * cos(v)) * cos(u), (1 + 0.35 * cos(v)) * sin(u), 0.35 * sin(v) };
-            place(p, off);
-            for (int k = 0; k < 3; k++)
-                m->pos[3 * (size_t)(i * nv + j) + k] = (float)p[k];
-        }
-    size_t t = 0;
-    for (int i = 0; i < nu; i++)
-        for (int j = 0; j < nv; j++) {
-            uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j),
-                     c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
-            const uint32_t q[6] = { a, b, c, a, c, d };
-            memcpy(m->idx + 6 * t / 2, q, sizeof q);
-            t += 2;
-        }
-}
-
 static void bumpy_sphere(mesh *m, int level)
 {
     sc_proc_mesh pm;
@@ -368,63 +322,10 @@ static void bumpy_sphere(mesh *m, int level)
         double s = 1 + 0.3 * sin(5 * p[0]) * sin(4 * p[1] + 0.3) * sin(3 * p[2] + 0.7);
         for (int k = 0; k < 3; k++)
             p[k] *= s;
-        place(p, off);
+        place(p, off, 1.0);
         for (int k = 0; k < 3; k++)
             m->pos[3 * v + k] = (float)p[k];
     }
-}
-
-/* A box with every face an n x n grid: flat fans and 90-degree creases. */
-static void grid_box(mesh *m, int n)
-{
-    int s = n + 1;
-    uint32_t *id = malloc((size_t)s * s * s * sizeof *id);
-    m->nv = 0, m->nt = (uint32_t)(12 * n * n);
-    m->pos = malloc(3 * (size_t)s * s * s * sizeof *m->pos);
-    m->idx = malloc(3 * (size_t)m->nt * sizeof *m->idx);
-    const double off[3] = { 0.9, 0.1, -2.3 }, ext[3] = { 1.3, 0.7, 1.0 };
-    for (int i = 0; i < s; i++)
-        for (int j = 0; j < s; j++)
-            for (int k = 0; k < s; k++) {
-                size_t g = ((size_t)i * s + j) * s + k;
-                id[g] = UINT32_MAX;
-                if (i && j && k && i < n && j < n && k < n)
-                    continue;
-                double p[3] = { ext[0] * i / n, ext[1] * j / n, ext[2] * k / n };
-                place(p, off);
-                for (int a = 0; a < 3; a++)
-                    m->pos[3 * (size_t)m->nv + a] = (float)p[a];
-                id[g] = m->nv++;
-            }
-    size_t t = 0;
-    for (int axis = 0; axis < 3; axis++)
-        for (int side = 0; side <= n; side += n)
-            for (int u = 0; u < n; u++)
-                for (int v = 0; v < n; v++) {
-                    int c[4][3];
-                    const int du[4] = { 0, 1, 1, 0 }, dv[4] = { 0, 0, 1, 1 };
-                    for (int q = 0; q < 4; q++) {
-                        c[q][axis] = side;
-                        c[q][(axis + 1) % 3] = u + du[q];
-                        c[q][(axis + 2) % 3] = v + dv[q];
-                    }
-                    uint32_t w[4];
-                    for (int q = 0; q < 4; q++)
-                        w[q] = id[((size_t)c[q][0] * s + c[q][1]) * s + c[q][2]];
-                    int flip = side == 0, diag = (u + v) % 2;
-                    uint32_t t0[3] = { w[0], w[1], w[2] }, t1[3] = { w[0], w[2], w[3] };
-                    if (diag) {
-                        t0[0] = w[1], t0[1] = w[2], t0[2] = w[3];
-                        t1[0] = w[1], t1[1] = w[3], t1[2] = w[0];
-                    }
-                    if (flip) {
-                        uint32_t x = t0[1]; t0[1] = t0[2], t0[2] = x;
-                        x = t1[1]; t1[1] = t1[2], t1[2] = x;
-                    }
-                    memcpy(m->idx + 3 * t++, t0, sizeof t0);
-                    memcpy(m->idx + 3 * t++, t1, sizeof t1);
-                }
-    free(id);
 }
 
 static int edgy(uint8_t tag)
@@ -566,7 +467,8 @@ static void test_torus(void **state)
 {
     (void)state;
     mesh m;
-    torus(&m, 72, 36);
+    const double off[3] = { 3.1, -1.7, 0.45 };
+    torus(&m, 72, 36, off, 1.0);
     run_mesh("torus", &m, 6000, 3);
     mesh_free(&m);
 }
@@ -584,7 +486,7 @@ static void test_grid_box(void **state)
 {
     (void)state;
     mesh m;
-    grid_box(&m, 10);
+    grid_box(&m, 10, 0);
     run_mesh("grid box", &m, 6000, 5);
     mesh_free(&m);
 }
@@ -593,71 +495,55 @@ static void test_grid_box(void **state)
 
 /* The rays `spherecull compare --rays adversarial` checks with its default
  * options: 65536 rays, seed 1, an even stride of 10000 of them. */
+static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
+{
+    (void)ctx;
+    int closed = 0;
+    sc_mesh_is_closed(m, &closed);
+    assert_true(closed);
+    sc_rayset set;
+    assert_int_equal(sc_rayset_adversarial(m, 65536, 1, &set), SC_OK);
+    size_t ns = 10000, *sample = malloc(ns * sizeof *sample);
+    sc_ray *sr = malloc(ns * sizeof *sr);
+    for (size_t s = 0; s < ns; s++) {
+        sample[s] = (size_t)((double)s * set.count / ns);
+        sr[s] = set.rays[sample[s]];
+    }
+    sc_oracle o;
+    assert_int_equal(sc_oracle_run(m, sr, ns, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o), SC_OK);
+    check_oracle_consistent(&o);
+    const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_AUTO };
+    float *bt = NULL;
+    for (size_t mi = 0; mi < 3; mi++) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.prefilter = modes[mi];
+        sc_bvh *bvh;
+        assert_int_equal(sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &bvh),
+                         SC_OK);
+        if (!bt)
+            bt = brute_all(bvh, &set, sample, ns, 8);   /* 1250 rays x all triangles */
+        tally tl;
+        score(bvh, &set, sample, &o, bt, &tl);
+        print_message("%s (%u tris) %s: crossing vertex/edge rays %zu, holes %zu (any-hit %zu); touching "
+                      "rays %zu, grazes missed %zu; old definition %zu; traversal != brute %zu\n",
+                      name, m->triangle_count, sc_prefilter_mode_name(modes[mi]), tl.hole_rays, tl.holes,
+                      tl.any_holes, tl.graze_rays, tl.grazes_missed, tl.old_holes, tl.not_brute);
+        assert_int_equal(tl.holes, 0);
+        assert_int_equal(tl.any_holes, 0);
+        assert_int_equal(tl.not_brute, 0);
+        sc_bvh_free(bvh);
+    }
+    sc_oracle_free(&o);
+    free(sample), free(sr), free(bt);
+    sc_rayset_free(&set);
+}
+
 static void test_shared_scenes(void **state)
 {
     (void)state;
-    const char *dir = getenv("SC_TEST_SCENES");
-    const char *names[] = { "fandisk.obj", "armadillo.obj", "dragon_100k.ply" };
-    int ran = 0;
-    for (size_t f = 0; f < sizeof names / sizeof names[0]; f++) {
-        char path[1024];
-        snprintf(path, sizeof path, "%s/%s", dir ? dir : "", names[f]);
-        FILE *fp = dir ? fopen(path, "rb") : NULL;
-        if (!fp)
-            continue;
-        fclose(fp);
-        sc_scene *scene;
-        char err[256];
-        assert_int_equal(sc_scene_load(path, NULL, &scene, err, sizeof err), SC_OK);
-        sc_scene_view v;
-        assert_int_equal(sc_scene_get_view(scene, &v), SC_OK);
-        sc_mesh_view m = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
-        int closed = 0;
-        sc_mesh_is_closed(&m, &closed);
-        assert_true(closed);
-        sc_rayset set;
-        assert_int_equal(sc_rayset_adversarial(&m, 65536, 1, &set), SC_OK);
-        size_t ns = 10000, *sample = malloc(ns * sizeof *sample);
-        sc_ray *sr = malloc(ns * sizeof *sr);
-        for (size_t s = 0; s < ns; s++) {
-            sample[s] = (size_t)((double)s * set.count / ns);
-            sr[s] = set.rays[sample[s]];
-        }
-        sc_oracle o;
-        assert_int_equal(sc_oracle_run(&m, sr, ns, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o), SC_OK);
-        check_oracle_consistent(&o);
-        const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_AUTO };
-        float *bt = NULL;
-        for (size_t mi = 0; mi < 3; mi++) {
-            sc_bvh_config cfg;
-            sc_bvh_config_default(&cfg);
-            cfg.prefilter = modes[mi];
-            sc_bvh *bvh;
-            assert_int_equal(sc_bvh_build(m.positions, m.vertex_count, m.indices, m.triangle_count, &cfg, &bvh),
-                             SC_OK);
-            if (!bt)
-                bt = brute_all(bvh, &set, sample, ns, 8);   /* 1250 rays x all triangles */
-            tally tl;
-            score(bvh, &set, sample, &o, bt, &tl);
-            print_message("%s (%u tris) %s: crossing vertex/edge rays %zu, holes %zu (any-hit %zu); touching "
-                          "rays %zu, grazes missed %zu; old definition %zu; traversal != brute %zu\n",
-                          names[f], m.triangle_count, sc_prefilter_mode_name(modes[mi]), tl.hole_rays, tl.holes,
-                          tl.any_holes, tl.graze_rays, tl.grazes_missed, tl.old_holes, tl.not_brute);
-            assert_int_equal(tl.holes, 0);
-            assert_int_equal(tl.any_holes, 0);
-            assert_int_equal(tl.not_brute, 0);
-            sc_bvh_free(bvh);
-        }
-        sc_oracle_free(&o);
-        free(sample), free(sr), free(bt);
-        sc_rayset_free(&set);
-        sc_scene_free(scene);
-        ran++;
-    }
-    if (!ran) {
-        print_message("no shared scenes in '%s': skipped\n", dir ? dir : "(SC_TEST_SCENES unset)");
-        skip();
-    }
+    const char *const names[] = { "fandisk.obj", "armadillo.obj", "dragon_100k.ply" };
+    each_shared_scene(names, sizeof names / sizeof names[0], shared_scene, NULL);
 }
 
 int main(void)

@@ -6,6 +6,7 @@
 #include <mpfr.h>
 
 #include "crossing.h"
+#include "tri_filter.h"
 
 /* Every input is a float: an integer multiple of 2^-149 below 2^128 in
  * magnitude. A difference of two is a multiple of 2^-149 below 2^129 (278
@@ -25,65 +26,16 @@ const char *sc_xkind_name(sc_xkind k)
 
 /* ---- the conservative double filter -------------------------------------- */
 
-#define REL 1e-12
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static double l1(const double a[3])
-{
-    return fabs(a[0]) + fabs(a[1]) + fabs(a[2]);
-}
-static void cross3(double o[3], const double a[3], const double b[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 int sc_x_may_hit(const sc_ray *r, const float tri[9])
 {
-    /* The same bounds as the oracle's filter: every product here is of
-     * float differences, each rounding is below 2^-52 of the L1 bound the
-     * slack REL is a multiple of. */
-    double a[3], b[3], c[3], x[3], D[3];
-    for (int k = 0; k < 3; k++) {
-        a[k] = (double)tri[k] - r->org[k];
-        b[k] = (double)tri[3 + k] - r->org[k];
-        c[k] = (double)tri[6 + k] - r->org[k];
-        D[k] = r->dir[k];
-    }
-    double dl = l1(D), al = l1(a), bl = l1(b), cl = l1(c);
-    cross3(x, b, c);
-    double v0 = dot3(D, x), e0 = REL * dl * bl * cl;
-    cross3(x, c, a);
-    double v1 = dot3(D, x), e1 = REL * dl * cl * al;
-    cross3(x, a, b);
-    double v2 = dot3(D, x), e2 = REL * dl * al * bl;
-    int pos = v0 > e0 || v1 > e1 || v2 > e2;
-    int neg = v0 < -e0 || v1 < -e1 || v2 < -e2;
-    if (pos && neg)
-        return 0;
-    double f1[3], f2[3], n[3];
+    /* The oracle's own filter on the same widened inputs, so both skip
+     * exactly the same triangles. */
+    double v[9], O[3], D[3], t_lo;
+    for (int k = 0; k < 9; k++)
+        v[k] = tri[k];
     for (int k = 0; k < 3; k++)
-        f1[k] = (double)tri[3 + k] - tri[k], f2[k] = (double)tri[6 + k] - tri[k];
-    cross3(n, f1, f2);
-    double nl = l1(f1) * l1(f2);
-    double num = dot3(a, n), en = REL * al * nl;
-    double den = dot3(D, n), ed = REL * dl * nl;
-    if (!(fabs(den) > 2 * ed))
-        return 1;
-    double q[4] = { (num - en) / (den - ed), (num - en) / (den + ed), (num + en) / (den - ed),
-                    (num + en) / (den + ed) };
-    double lo = q[0], hi = q[0];
-    for (int k = 1; k < 4; k++) {
-        if (q[k] < lo) lo = q[k];
-        if (q[k] > hi) hi = q[k];
-    }
-    lo -= REL * fabs(lo);
-    hi += REL * fabs(hi);
-    return !(hi < r->tmin || lo > r->tmax);
+        O[k] = r->org[k], D[k] = r->dir[k];
+    return sc_tri_filter(v, O, D, r->tmin, r->tmax, &t_lo);
 }
 
 /* ---- exact classification ----------------------------------------------- */

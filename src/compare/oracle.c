@@ -10,12 +10,9 @@
 #include "crossing.h"
 #include "oracle.h"
 #include "sc_ref_ray.h"
+#include "tri_filter.h"
 
 enum { CLUSTER = 32 };
-
-/* Relative slack of the double filter: the computations below have a
- * rounding error of at most ~1e-15 of the bounds they are compared with. */
-#define REL 1e-12
 
 typedef struct oracle_mesh {
     size_t ntri, nclusters;
@@ -168,69 +165,6 @@ static int box_may_hit(const double *b, const double O[3], const double D[3], do
     return 1;
 }
 
-static double dot(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static double l1(const double a[3])
-{
-    return fabs(a[0]) + fabs(a[1]) + fabs(a[2]);
-}
-static void cross(double o[3], const double a[3], const double b[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* 0: the triangle certainly misses within [tmin, tmax]. Else 1 and *t_lo is
- * a lower bound of its exact t (tmin when unknown). The L1 norms bound the
- * magnitude of every product summed, so REL times them bounds the rounding. */
-static int filter(const double *v, const double O[3], const double D[3], double tmin, double tmax,
-                  double *t_lo)
-{
-    double a[3], b[3], c[3], x[3];
-    for (int k = 0; k < 3; k++) {
-        a[k] = v[k] - O[k];
-        b[k] = v[3 + k] - O[k];
-        c[k] = v[6 + k] - O[k];
-    }
-    double dl = l1(D), al = l1(a), bl = l1(b), cl = l1(c);
-    cross(x, b, c);
-    double v0 = dot(D, x), e0 = REL * dl * bl * cl;
-    cross(x, c, a);
-    double v1 = dot(D, x), e1 = REL * dl * cl * al;
-    cross(x, a, b);
-    double v2 = dot(D, x), e2 = REL * dl * al * bl;
-    int pos = v0 > e0 || v1 > e1 || v2 > e2;
-    int neg = v0 < -e0 || v1 < -e1 || v2 < -e2;
-    if (pos && neg)
-        return 0;
-    *t_lo = tmin;
-    double f1[3], f2[3], n[3];
-    for (int k = 0; k < 3; k++)
-        f1[k] = v[3 + k] - v[k], f2[k] = v[6 + k] - v[k];
-    cross(n, f1, f2);
-    double nl = l1(f1) * l1(f2);
-    double num = dot(a, n), en = REL * al * nl;
-    double den = dot(D, n), ed = REL * dl * nl;
-    if (!(fabs(den) > 2 * ed))
-        return 1;                                   /* near-parallel: decide exactly */
-    double q[4] = { (num - en) / (den - ed), (num - en) / (den + ed), (num + en) / (den - ed),
-                    (num + en) / (den + ed) };
-    double lo = q[0], hi = q[0];
-    for (int k = 1; k < 4; k++) {
-        if (q[k] < lo) lo = q[k];
-        if (q[k] > hi) hi = q[k];
-    }
-    lo -= REL * fabs(lo);
-    hi += REL * fabs(hi);
-    if (hi < tmin || lo > tmax)
-        return 0;
-    *t_lo = lo > tmin ? lo : tmin;
-    return 1;
-}
-
 static void *run_job(void *arg)
 {
     job *j = arg;
@@ -261,7 +195,7 @@ static void *run_job(void *arg)
             size_t end = (c + 1) * CLUSTER < m->ntri ? (c + 1) * CLUSTER : m->ntri;
             for (size_t k = c * CLUSTER; k < end; k++) {
                 double tl;
-                if (!filter(m->v[k], O, D, tmin, tmax, &tl))
+                if (!sc_tri_filter(m->v[k], O, D, tmin, tmax, &tl))
                     continue;
                 if (nc == cap) {
                     cand *ncs = realloc(cs, 2 * cap * sizeof *cs);

@@ -276,17 +276,16 @@ static uint32_t live_lanes(const sc_embree *e, uint32_t c, const sc_ray *r, sc_e
 #define RAYN(p, k) (((float *)(p))[(k) * N + i])
 #define RAYN_U(p, k) (((unsigned *)(p))[(k) * N + i])
 
-static void intersect_cb(const struct RTCIntersectFunctionNArguments *args)
+/* The cluster loop of both callbacks. Always inlined with a constant
+ * `occluded`, so each callback compiles to its own branch-free loop. With
+ * occluded, hit is unused and the first hit marks the ray and stops. */
+static inline __attribute__((always_inline)) void
+cluster_n(const sc_embree *e, sc_embree_counters *ctr, const int *valid, unsigned N, float *ray, float *hit,
+          uint32_t c, unsigned geomID, unsigned instID, const int occluded)
 {
-    const sc_embree *e = args->geometryUserPtr;
-    sc_embree_counters *ctr = ((ctx_ext *)args->context)->ctr;
-    const unsigned N = args->N;
-    float *ray = (float *)args->rayhit;
-    float *hit = ray + 12 * N;
-    const uint32_t c = args->primID;
     const size_t w = (size_t)e->width;
     for (unsigned i = 0; i < N; i++) {
-        if (!args->valid[i])
+        if (!valid[i])
             continue;
         sc_ray r = { { RAYN(ray, 0), RAYN(ray, 1), RAYN(ray, 2) }, RAYN(ray, 3),
                      { RAYN(ray, 4), RAYN(ray, 5), RAYN(ray, 6) }, RAYN(ray, 8) };
@@ -310,6 +309,10 @@ static void intersect_cb(const struct RTCIntersectFunctionNArguments *args)
             }
             if (!h)
                 continue;
+            if (occluded) {
+                RAYN(ray, 8) = -INFINITY;    /* Embree's "occluded" mark */
+                break;
+            }
             const float *tv = e->tri[c * w + (size_t)j];
             float e1[3], e2[3];
             for (int a = 0; a < 3; a++)
@@ -322,49 +325,23 @@ static void intersect_cb(const struct RTCIntersectFunctionNArguments *args)
             RAYN(hit, 3) = u;
             RAYN(hit, 4) = v;
             RAYN_U(hit, 5) = e->prim[c * w + (size_t)j];
-            RAYN_U(hit, 6) = args->geomID;
-            RAYN_U(hit, 7) = args->context->instID[0];
+            RAYN_U(hit, 6) = geomID;
+            RAYN_U(hit, 7) = instID;
         }
     }
 }
 
+static void intersect_cb(const struct RTCIntersectFunctionNArguments *args)
+{
+    float *ray = (float *)args->rayhit;
+    cluster_n(args->geometryUserPtr, ((ctx_ext *)args->context)->ctr, args->valid, args->N, ray,
+              ray + 12 * args->N, args->primID, args->geomID, args->context->instID[0], 0);
+}
+
 static void occluded_cb(const struct RTCOccludedFunctionNArguments *args)
 {
-    const sc_embree *e = args->geometryUserPtr;
-    sc_embree_counters *ctr = ((ctx_ext *)args->context)->ctr;
-    const unsigned N = args->N;
-    float *ray = (float *)args->ray;
-    const uint32_t c = args->primID;
-    const size_t w = (size_t)e->width;
-    for (unsigned i = 0; i < N; i++) {
-        if (!args->valid[i])
-            continue;
-        sc_ray r = { { RAYN(ray, 0), RAYN(ray, 1), RAYN(ray, 2) }, RAYN(ray, 3),
-                     { RAYN(ray, 4), RAYN(ray, 5), RAYN(ray, 6) }, RAYN(ray, 8) };
-        if (ctr)
-            ctr->cluster_calls++;
-        uint32_t live = live_lanes(e, c, &r, ctr);
-        if (!live)
-            continue;
-        wt_ray wr;
-        wt_ray_init(&wr, r.org, r.dir);
-        while (live) {
-            int j = __builtin_ctz(live);
-            live &= live - 1;
-            float t, u, v;
-            int h = wt_intersect(&wr, e->tri[c * w + (size_t)j], r.tmin, r.tmax, &t, &u, &v);
-            if (ctr) {
-                ctr->tri_tests++;
-                ctr->tri_hits += (uint64_t)h;
-                if (!h && e->cfg.mode == SC_EMBREE_USER_PREFILTER)
-                    ctr->false_positives++;
-            }
-            if (h) {
-                RAYN(ray, 8) = -INFINITY;    /* Embree's "occluded" mark */
-                break;
-            }
-        }
-    }
+    cluster_n(args->geometryUserPtr, ((ctx_ext *)args->context)->ctr, args->valid, args->N,
+              (float *)args->ray, NULL, args->primID, args->geomID, 0, 1);
 }
 #undef RAYN
 #undef RAYN_U
