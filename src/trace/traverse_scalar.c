@@ -39,9 +39,18 @@ static inline unsigned KFN(node_test_par)(const KCTX *c, const sc_bvh_node8 *nod
     return sc_slab_par(c->p, node, tmin, tmax, dist);
 }
 
-/* Watertight test of one lane (Woop, Benthin, Wald 2013). */
-static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
-                                  float tmin, float tmax, float *t, float *un, float *vn, float *den)
+/* The triangle of lane i in the ray's sheared frame (Woop et al.: translate
+ * by the origin, permute so kz is the dominant axis, shear) and its three
+ * edge functions; shared by the watertight and the exact test, which must see
+ * the same bits. */
+typedef struct lane_sheared {
+    float Ax, Ay, Bx, By, Cx, Cy;   /* sheared 2D vertices */
+    float Akz, Bkz, Ckz;            /* translated depth components, unscaled */
+    float U, V, W;                  /* edge functions */
+} lane_sheared;
+
+static inline void lane_shear(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
+                              lane_sheared *s)
 {
     const int kx = p->kx, ky = p->ky, kz = p->kz;
     float A[3], B[3], C[3];
@@ -50,13 +59,24 @@ static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsign
         B[k] = rows[(3 + k) * W + i] - p->org[k];
         C[k] = rows[(6 + k) * W + i] - p->org[k];
     }
-    float Ax = A[kx] - p->Sx * A[kz], Ay = A[ky] - p->Sy * A[kz];
-    float Bx = B[kx] - p->Sx * B[kz], By = B[ky] - p->Sy * B[kz];
-    float Cx = C[kx] - p->Sx * C[kz], Cy = C[ky] - p->Sy * C[kz];
-    float U = Cx * By - Cy * Bx;
-    float V = Ax * Cy - Ay * Cx;
-    float Wf = Bx * Ay - By * Ax;
-    float Az = p->Sz * A[kz], Bz = p->Sz * B[kz], Cz = p->Sz * C[kz];
+    s->Ax = A[kx] - p->Sx * A[kz], s->Ay = A[ky] - p->Sy * A[kz];
+    s->Bx = B[kx] - p->Sx * B[kz], s->By = B[ky] - p->Sy * B[kz];
+    s->Cx = C[kx] - p->Sx * C[kz], s->Cy = C[ky] - p->Sy * C[kz];
+    s->U = s->Cx * s->By - s->Cy * s->Bx;
+    s->V = s->Ax * s->Cy - s->Ay * s->Cx;
+    s->W = s->Bx * s->Ay - s->By * s->Ax;
+    s->Akz = A[kz], s->Bkz = B[kz], s->Ckz = C[kz];
+}
+
+/* Watertight test of one lane (Woop, Benthin, Wald 2013). */
+static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i,
+                                  float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+    lane_sheared sh;
+    lane_shear(p, rows, W, i, &sh);
+    const float Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
+    const float U = sh.U, V = sh.V, Wf = sh.W;
+    float Az = p->Sz * sh.Akz, Bz = p->Sz * sh.Bkz, Cz = p->Sz * sh.Ckz;
     if (U == 0 || V == 0 || Wf == 0) {
         float u, v;
         if (!sc_watertight_double(Ax, Ay, Bx, By, Cx, Cy, Az, Bz, Cz, tmin, tmax, t, &u, &v))
@@ -86,19 +106,10 @@ static inline int lane_watertight(const sc_ray_pre *p, const float *rows, unsign
 static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i, float tmin,
                              float tmax, float *t, float *te, float *un, float *vn, float *den)
 {
-    const int kx = p->kx, ky = p->ky, kz = p->kz;
-    float A[3], B[3], C[3];
-    for (int k = 0; k < 3; k++) {
-        A[k] = rows[(0 + k) * W + i] - p->org[k];
-        B[k] = rows[(3 + k) * W + i] - p->org[k];
-        C[k] = rows[(6 + k) * W + i] - p->org[k];
-    }
-    float Ax = A[kx] - p->Sx * A[kz], Ay = A[ky] - p->Sy * A[kz];
-    float Bx = B[kx] - p->Sx * B[kz], By = B[ky] - p->Sy * B[kz];
-    float Cx = C[kx] - p->Sx * C[kz], Cy = C[ky] - p->Sy * C[kz];
-    float U = Cx * By - Cy * Bx;
-    float V = Ax * Cy - Ay * Cx;
-    float Wf = Bx * Ay - By * Ax;
+    lane_sheared sh;
+    lane_shear(p, rows, W, i, &sh);
+    const float Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
+    const float U = sh.U, V = sh.V, Wf = sh.W;
     float hA = fabsf(Ax) + fabsf(Ay), hB = fabsf(Bx) + fabsf(By), hC = fabsf(Cx) + fabsf(Cy);
     float EU = fmaf(p->xK, hB + hC, p->xc0);
     float EV = fmaf(p->xK, hA + hC, p->xc0);
@@ -110,7 +121,7 @@ static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W,
         return 0;
     if (!((pU & pV & pW) | (nU & nV & nW)))
         return 1;
-    float Az = p->Sz * A[kz], Bz = p->Sz * B[kz], Cz = p->Sz * C[kz];
+    float Az = p->Sz * sh.Akz, Bz = p->Sz * sh.Bkz, Cz = p->Sz * sh.Ckz;
     float det = (U + V) + Wf;
     float T = (U * Az + V * Bz) + Wf * Cz;
     float inv = 1.0f / det;

@@ -117,14 +117,19 @@ KFN(mask8)(__m256 m)
     return (unsigned)_mm256_movemask_ps(m);
 }
 
-/* Watertight test of 8 lanes; returns the hit mask (bit 0 = lane h). */
-static inline __attribute__((always_inline)) KATTR unsigned
-KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
-                 float tmin, float tmax, float *t, float *un, float *vn, float *den)
+/* Lanes h..h+7 of a leaf block in the ray's sheared frame and their edge
+ * functions: the common first half of the watertight and the exact test,
+ * which must compute the same bits (the operations of lane_shear). */
+typedef struct KFN(sheared8) {
+    __m256 Ax, Ay, Bx, By, Cx, Cy, Akz, Bkz, Ckz, U, V, W;
+} KFN(sheared8);
+
+static inline __attribute__((always_inline)) KATTR void
+KFN(shear8)(const KCTX *c, const float *rows, unsigned W, unsigned h, KFN(sheared8) *s)
 {
     const int kx = c->kx, ky = c->ky, kz = c->kz;
     const __m256 okx = c->okx, oky = c->oky, okz = c->okz;
-    const __m256 Sx = c->Sx, Sy = c->Sy, Sz = c->Sz;
+    const __m256 Sx = c->Sx, Sy = c->Sy;
 #define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
     __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
     __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
@@ -136,9 +141,24 @@ KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsig
     __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(2, kx), okx), _mm256_mul_ps(Sx, Ckz));
     __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(2, ky), oky), _mm256_mul_ps(Sy, Ckz));
 #undef LD
-    __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
-    __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
-    __m256 Wv = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+    s->Ax = Ax, s->Ay = Ay, s->Bx = Bx, s->By = By, s->Cx = Cx, s->Cy = Cy;
+    s->Akz = Akz, s->Bkz = Bkz, s->Ckz = Ckz;
+    s->U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
+    s->V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
+    s->W = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+}
+
+/* Watertight test of 8 lanes; returns the hit mask (bit 0 = lane h). */
+static inline __attribute__((always_inline)) KATTR unsigned
+KFN(watertight8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
+                 float tmin, float tmax, float *t, float *un, float *vn, float *den)
+{
+    const __m256 Sz = c->Sz;
+    KFN(sheared8) sh;
+    KFN(shear8)(c, rows, W, h, &sh);
+    const __m256 Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
+    const __m256 Akz = sh.Akz, Bkz = sh.Bkz, Ckz = sh.Ckz;
+    const __m256 U = sh.U, V = sh.V, Wv = sh.W;
     const __m256 zero = _mm256_setzero_ps();
     __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
                               _mm256_cmp_ps(Wv, zero, _CMP_LT_OQ));
@@ -191,23 +211,12 @@ static inline __attribute__((always_inline)) KATTR unsigned
 KFN(exact8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned live,
             float tmin, float tmax, float *t, float *te, float *un, float *vn, float *den)
 {
-    const int kx = c->kx, ky = c->ky, kz = c->kz;
-    const __m256 okx = c->okx, oky = c->oky, okz = c->okz;
-    const __m256 Sx = c->Sx, Sy = c->Sy, Sz = c->Sz;
-#define LD(j, k) KFN(row8)(rows + (3 * (j) + (k)) * W, W, h)
-    __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
-    __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
-    __m256 Ckz = _mm256_sub_ps(LD(2, kz), okz);
-    __m256 Ax = _mm256_sub_ps(_mm256_sub_ps(LD(0, kx), okx), _mm256_mul_ps(Sx, Akz));
-    __m256 Ay = _mm256_sub_ps(_mm256_sub_ps(LD(0, ky), oky), _mm256_mul_ps(Sy, Akz));
-    __m256 Bx = _mm256_sub_ps(_mm256_sub_ps(LD(1, kx), okx), _mm256_mul_ps(Sx, Bkz));
-    __m256 By = _mm256_sub_ps(_mm256_sub_ps(LD(1, ky), oky), _mm256_mul_ps(Sy, Bkz));
-    __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(2, kx), okx), _mm256_mul_ps(Sx, Ckz));
-    __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(2, ky), oky), _mm256_mul_ps(Sy, Ckz));
-#undef LD
-    __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
-    __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
-    __m256 Wv = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
+    const __m256 Sz = c->Sz;
+    KFN(sheared8) sh;
+    KFN(shear8)(c, rows, W, h, &sh);
+    const __m256 Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
+    const __m256 Akz = sh.Akz, Bkz = sh.Bkz, Ckz = sh.Ckz;
+    const __m256 U = sh.U, V = sh.V, Wv = sh.W;
     const __m256 sgn = _mm256_set1_ps(-0.0f);
 #define ABS(x) _mm256_andnot_ps(sgn, (x))
     __m256 hA = _mm256_add_ps(ABS(Ax), ABS(Ay));
