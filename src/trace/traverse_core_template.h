@@ -36,15 +36,20 @@ static inline __attribute__((always_inline)) KATTR int
 KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
           const int ANY, const int STATS, const int TEST, const int OCT)
 {
-    sc_ray_pre p;
-    sc_ray_precompute(ray, &p);
     /* exact mode: tmax is the culling bound, a float >= the exact t of the
      * closest hit so far (xb), which sc_xresolve chooses exactly */
     sc_xhit xb;
     xb.have = 0;
-    int xready = 0;           /* the edge-bound constants: computed at the first leaf */
     KCTX ctx;
-    KFN(ctx_init)(&ctx, &p);
+    int parallel = 0;
+    if (OCT >= 0) {
+        KFN(ctx_fast)(&ctx, ray, bvh);
+    } else {
+        sc_ray_pre p;
+        sc_ray_precompute(ray, &p, bvh->root_lo, bvh->root_hi);
+        KFN(ctx_init)(&ctx, &p);
+        parallel = p.parallel;
+    }
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
     sc_ray cur = *ray;
@@ -66,7 +71,7 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
             float dist[SC_BVH_N] __attribute__((aligned(32)));
             /* OCT = -2: a parallel ray (trace_common.h); the counting
              * kernels (OCT = -1) decide per ray */
-            unsigned m = OCT == -2 || (OCT == -1 && p.parallel)
+            unsigned m = OCT == -2 || (OCT == -1 && parallel)
                              ? KFN(node_test_par)(&ctx, node, tmin, tmax, dist)
                              : KFN(node_test)(&ctx, node, tmin, tmax, dist, OCT, !ANY);
             if (!m)
@@ -112,11 +117,6 @@ KFN(core)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *
                 float te[16] __attribute__((aligned(64)));
                 if (STATS)
                     st->tri_tests += (uint64_t)__builtin_popcount(live);
-                if (TEST == SC_TRI_EXACT && !xready) {
-                    sc_ray_pre_exact(&p, bvh->root_lo, bvh->root_hi);
-                    KFN(ctx_exact)(&ctx, &p);
-                    xready = 1;
-                }
                 unsigned hm = KFN(leaf_test)(&ctx, rows, W, live, tmin, tmax, TEST, t, te, un, vn, den);
                 if (TEST == SC_TRI_EXACT) {
                     for (; hm; hm &= hm - 1) {

@@ -5,11 +5,17 @@
 
 #define KFN(name) name##_scalar
 #define KATTR
-typedef struct { const sc_ray_pre *p; } ctx_scalar;
+typedef struct { sc_ray_pre pre; const sc_ray_pre *p; } ctx_scalar;
 #define KCTX ctx_scalar
 
-static inline void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p) { c->p = p; }
-static inline void KFN(ctx_exact)(KCTX *c, const sc_ray_pre *p) { (void)c, (void)p; }
+static inline void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p) { c->pre = *p, c->p = &c->pre; }
+/* The set-up of non-parallel rays: here the same as the generic one. */
+static inline void KFN(ctx_fast)(KCTX *c, const sc_ray *r, const sc_bvh *bvh)
+{
+    sc_ray_pre p;
+    sc_ray_precompute(r, &p, bvh->root_lo, bvh->root_hi);
+    KFN(ctx_init)(c, &p);
+}
 
 static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,
                                       float *dist, const int OCT, const int WANT_DIST)
@@ -20,13 +26,11 @@ static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, f
     for (int i = 0; i < SC_BVH_N; i++) {
         float tn[3], tf[3];
         for (int k = 0; k < 3; k++) {
-            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord[k]);
-            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord[k]);
+            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord_near[k]);
+            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord_far[k]);
         }
         float a = sc_fmax(sc_fmax(tn[0], tn[1]), sc_fmax(tn[2], tmin));
         float b = sc_fmin(sc_fmin(tf[0], tf[1]), sc_fmin(tf[2], tmax));
-        a = fmaf(a, SC_SLAB_DOWN, -p->slab_eps);
-        b = fmaf(b, SC_SLAB_UP, p->slab_eps);
         dist[i] = a;
         mask |= (unsigned)(a <= b) << i;
     }
@@ -194,8 +198,9 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
     if (!bvh || !ray || !hit || !sc_ray_valid(ray))
         return SC_ERR_INVALID_ARGUMENT;
     sc_ray_pre p;
-    sc_ray_precompute(ray, &p);
-    ctx_scalar c = { &p };
+    sc_ray_precompute(ray, &p, bvh->root_lo, bvh->root_hi);
+    ctx_scalar c;
+    ctx_init_scalar(&c, &p);
     float tmax = ray->tmax;
     hit->prim = SC_HITREC_MISS;
     hit->t = ray->tmax;
@@ -205,7 +210,6 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
     const int test = bvh->cfg.tri_test;
     sc_xhit xb;
     xb.have = 0;
-    sc_ray_pre_exact(&p, bvh->root_lo, bvh->root_hi);
     for (size_t ni = 0; ni < bvh->node_count; ni++) {
         const sc_bvh_node8 *node = &bvh->nodes[ni];
         for (int s = 0; s < SC_BVH_N; s++) {

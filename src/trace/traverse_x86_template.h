@@ -5,7 +5,7 @@
  * that of traverse_scalar.c, operation for operation. */
 
 typedef struct {
-    __m256 ord[3], rd[3], eps;
+    __m256 ordn[3], ordf[3], rd[3];
     size_t near_off[3], far_off[3];      /* byte offsets of rows in a node */
     __m256 okx, oky, okz, Sx, Sy, Sz, tmin;   /* broadcast once per ray, not per leaf */
     __m256 xK, xc0;                           /* exact test's edge bound */
@@ -18,7 +18,8 @@ typedef struct {
 static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
 {
     for (int k = 0; k < 3; k++) {
-        c->ord[k] = _mm256_set1_ps(p->ord[k]);
+        c->ordn[k] = _mm256_set1_ps(p->ord_near[k]);
+        c->ordf[k] = _mm256_set1_ps(p->ord_far[k]);
         c->rd[k] = _mm256_set1_ps(p->rd[k]);
         c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
         c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
@@ -27,7 +28,6 @@ static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
         c->rdp[k] = _mm256_set1_ps(p->rdp[k]);
         c->dir_s[k] = p->dir[k];
     }
-    c->eps = _mm256_set1_ps(p->slab_eps);
     c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
     c->okx = _mm256_set1_ps(p->org[p->kx]);
     c->oky = _mm256_set1_ps(p->org[p->ky]);
@@ -36,12 +36,62 @@ static inline KATTR void KFN(ctx_init)(KCTX *c, const sc_ray_pre *p)
     c->Sy = _mm256_set1_ps(p->Sy);
     c->Sz = _mm256_set1_ps(p->Sz);
     c->tmin = _mm256_set1_ps(p->tmin);
-}
-
-static inline KATTR void KFN(ctx_exact)(KCTX *c, const sc_ray_pre *p)
-{
     c->xK = _mm256_set1_ps(p->xK);
     c->xc0 = _mm256_set1_ps(p->xc0);
+}
+
+/* The set-up of a non-parallel ray (every kernel with a known octant):
+ * sc_ray_precompute's arithmetic with the three axes in one xmm register,
+ * one divide instead of three and no stores and reloads of the struct. The
+ * per-ray set-up is a visible part of a primary ray, which visits only
+ * about two nodes. Lane k computes exactly what the scalar code computes
+ * for axis k (maxps(a, b) = a > b ? a : b = sc_fmax), so every ISA still
+ * sees the same bits. Lane 3 holds tmin/tmax/root_hi[0] and is ignored. */
+static inline __attribute__((always_inline)) KATTR void KFN(ctx_fast)(KCTX *c, const sc_ray *r, const sc_bvh *bvh)
+{
+    const __m128 sgn = _mm_set1_ps(-0.0f);
+    const __m128 o = _mm_loadu_ps(r->org), d = _mm_loadu_ps(r->dir);
+    const __m128 rd = _mm_div_ps(_mm_set1_ps(1.0f), d);
+    const __m128 ord = _mm_mul_ps(o, rd);
+    const __m128 m = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_lo), o)),
+                                _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_hi), o)));
+    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
+                                  _mm_mul_ps(m, _mm_set1_ps(0x1.0cp-23f)));
+    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
+                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-147f), _mm_set1_ps(0x1p-140f)));
+    const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
+#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
+    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
+    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
+    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
+#undef BC
+    float mk[3] = { m[0], m[1], m[2] }, rdk[3] = { rd[0], rd[1], rd[2] };
+    float xK, xc0;
+    sc_exact_consts(mk, &xK, &xc0);
+    c->xK = _mm256_set1_ps(xK);
+    c->xc0 = _mm256_set1_ps(xc0);
+    /* the shear of the watertight test, as in sc_ray_precompute */
+    const float *dd = r->dir;
+    int kz = 0;
+    if (fabsf(dd[1]) > fabsf(dd[kz])) kz = 1;
+    if (fabsf(dd[2]) > fabsf(dd[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (dd[kz] < 0) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    c->kx = kx, c->ky = ky, c->kz = kz;
+    c->okx = _mm256_set1_ps(r->org[kx]);
+    c->oky = _mm256_set1_ps(r->org[ky]);
+    c->okz = _mm256_set1_ps(r->org[kz]);
+    c->Sx = _mm256_set1_ps(dd[kx] / dd[kz]);
+    c->Sy = _mm256_set1_ps(dd[ky] / dd[kz]);
+    c->Sz = _mm256_set1_ps(rdk[kz]);
+    c->tmin = _mm256_set1_ps(r->tmin);
+    for (int k = 0; k < 3; k++)
+        c->org_s[k] = r->org[k], c->dir_s[k] = dd[k];
 }
 
 static inline __attribute__((always_inline)) KATTR unsigned
@@ -54,20 +104,18 @@ KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax, 
 #define NEAR(k) (OCT >= 0 ? (size_t)(2 * (k) + ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->near_off[k])
 #define FAR(k) (OCT >= 0 ? (size_t)(2 * (k) + 1 - ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->far_off[k])
 #define ROW(off) _mm256_load_ps((const float *)(const void *)(nb + (off)))
-    __m256 tnx = _mm256_fmsub_ps(ROW(NEAR(0)), c->rd[0], c->ord[0]);
-    __m256 tny = _mm256_fmsub_ps(ROW(NEAR(1)), c->rd[1], c->ord[1]);
-    __m256 tnz = _mm256_fmsub_ps(ROW(NEAR(2)), c->rd[2], c->ord[2]);
-    __m256 tfx = _mm256_fmsub_ps(ROW(FAR(0)), c->rd[0], c->ord[0]);
-    __m256 tfy = _mm256_fmsub_ps(ROW(FAR(1)), c->rd[1], c->ord[1]);
-    __m256 tfz = _mm256_fmsub_ps(ROW(FAR(2)), c->rd[2], c->ord[2]);
+    __m256 tnx = _mm256_fmsub_ps(ROW(NEAR(0)), c->rd[0], c->ordn[0]);
+    __m256 tny = _mm256_fmsub_ps(ROW(NEAR(1)), c->rd[1], c->ordn[1]);
+    __m256 tnz = _mm256_fmsub_ps(ROW(NEAR(2)), c->rd[2], c->ordn[2]);
+    __m256 tfx = _mm256_fmsub_ps(ROW(FAR(0)), c->rd[0], c->ordf[0]);
+    __m256 tfy = _mm256_fmsub_ps(ROW(FAR(1)), c->rd[1], c->ordf[1]);
+    __m256 tfz = _mm256_fmsub_ps(ROW(FAR(2)), c->rd[2], c->ordf[2]);
 #undef ROW
 #undef NEAR
 #undef FAR
     (void)tmin;
     __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, c->tmin));
     __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, _mm256_set1_ps(tmax)));
-    tn = _mm256_fmsub_ps(tn, _mm256_set1_ps(SC_SLAB_DOWN), c->eps);
-    tf = _mm256_fmadd_ps(tf, _mm256_set1_ps(SC_SLAB_UP), c->eps);
     if (WANT_DIST)
         _mm256_store_ps(dist, tn);
 #if SC_X86_AVX512
