@@ -4,7 +4,7 @@
  * in an SoA block (sc_sphere_block4/8/16 of sc_prefilter.h).
  *
  *   sc_bvh_config cfg;
- *   sc_bvh_config_default(&cfg);              // leaf 4, prefilter off
+ *   sc_bvh_config_default(&cfg);              // leaf 8, prefilter off
  *   cfg.prefilter = SC_PREFILTER_MINIMAL;
  *   sc_bvh *bvh;
  *   sc_status s = sc_bvh_build(pos, nverts, idx, ntris, &cfg, &bvh);

@@ -458,12 +458,16 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
 {
     if (!cfg)
         return;
-    cfg->leaf_size = 4;
+    /* Leaf 8 with a node visit costed at two leaf blocks (the SAH then
+     * fills leaves): measured with `spherecull bench --trav-cost`, 5-10 %
+     * faster shadow rays and 3-8 % faster primary rays than leaf 4 / cost 1
+     * on dragon, tree_aspen and bunny, and 54-56 instead of 61-66 B/tri. */
+    cfg->leaf_size = 8;
     cfg->prefilter = SC_PREFILTER_OFF;
     cfg->tri_test = SC_TRI_WATERTIGHT;
     cfg->isa = SC_TRACE_ISA_AUTO;
     cfg->sah_bins = 32;
-    cfg->traversal_cost = 1.0f;
+    cfg->traversal_cost = 2.0f;
 }
 
 static double now_seconds(void)

@@ -369,7 +369,7 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
         sc_cli_error(CMD, "%s: primary rays: %s", spec, sc_strerror(st));
         goto done;
     }
-    /* Shadow rays come from our own hits (leaf 4, no prefilter), so the
+    /* Shadow rays come from our own hits (the default configuration), so the
      * ray set does not depend on whether Embree is built in. */
     sc_bvh_config rc_cfg;
     sc_bvh_config_default(&rc_cfg);

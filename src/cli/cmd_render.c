@@ -28,7 +28,7 @@ static void help(FILE *f)
             "  -o, --output FILE     PNG to write (default render.png); written atomically\n"
             "  --width W, --height H image size (default: the scene's)\n"
             "  --prefilter MODE      off | circum | minimal | auto (default auto)\n"
-            "  --leaf N              triangles per BVH leaf, 1..%d (default 4)\n"
+            "  --leaf N              triangles per BVH leaf, 1..%d (default 8)\n"
             "  --threads N           render threads (default: all)\n"
             "  --isa ISA             auto | scalar | avx2 | avx512 (default auto)\n"
             "  --triangle TEST       watertight | moller | exact (default watertight)\n"
@@ -90,7 +90,7 @@ static void on_progress(void *ctx, double f)
 int sc_cmd_render(int argc, char **argv)
 {
     const char *scene_path = NULL, *out_path = "render.png";
-    long width = 0, height = 0, leaf = 4, threads = 0, ao = 0;
+    long width = 0, height = 0, leaf = 8, threads = 0, ao = 0;
     unsigned long long seed = 1, max_tris = 0;
     int stats_on = 0, quiet = 0, shadows = 1;
     sc_prefilter_mode prefilter = SC_PREFILTER_AUTO;

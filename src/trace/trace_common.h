@@ -213,10 +213,26 @@ typedef struct sc_stack_entry {
 } sc_stack_entry;
 
 /* Near-first order: the hit children sorted by entry distance (ties by slot),
- * all but the nearest pushed far-to-near; returns the nearest. */
+ * all but the nearest pushed far-to-near; returns the nearest. The caller
+ * passes at least two hit children. */
 SC_TRACE_INLINE uint64_t sc_order_children(const sc_bvh_node8 *node, unsigned mask, const float *dist,
                                          sc_stack_entry *stack, int *sp)
 {
+    /* Two hit children are the most common case (primary and shadow rays
+     * alike): one compare, no sort loop and its mispredicted exits. */
+    const unsigned rest = mask & (mask - 1);
+    if ((rest & (rest - 1)) == 0) {
+        int a = __builtin_ctz(mask), b = __builtin_ctz(rest);
+        if (dist[b] < dist[a]) {
+            int t = a;
+            a = b;
+            b = t;
+        }
+        stack[*sp].ref = node->child[b];
+        stack[*sp].dist = dist[b];
+        (*sp)++;
+        return node->child[a];
+    }
     uint64_t ref[SC_BVH_N];
     float d[SC_BVH_N];
     int k = 0;
