@@ -58,6 +58,11 @@ typedef struct sc_xhit {
  * errors sum to zero, so they only move t within the triangle's depth).
  * The derivation is in exact_tri.c. */
 #define SC_X_K202 (2.02f)
+/* The kernels use one bound per lane for all three edges,
+ * E1 = K (hA + hB + hC) + c0 >= each edge's E: the edge sum of the t bound is
+ * then at most 3 E1, and SC_X_K606 = 3 SC_X_K202. Looser by at most 2x, which
+ * only sends a few more lanes to sc_xresolve; six operations fewer per leaf. */
+#define SC_X_K606 (6.06f)
 #define SC_X_FLOOR_N (0x1p-146f)
 #define SC_X_K15U (15.0f * 0x1p-24f)
 #define SC_X_K3U (3.0f * 0x1p-24f)

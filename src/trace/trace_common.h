@@ -116,10 +116,13 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
          * m >= M(1 - u) and 5 % slack for the roundings of these few
          * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and
          * then fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny
-         * terms cover underflow of the products and a subnormal rd. */
+         * terms cover underflow of the products and a subnormal rd; the
+         * 2^-148 in g keeps g >= |o| C + m C when it underflows, because
+         * |rd| (up to 1e18) multiplies g's rounding error (found by
+         * tests/test_slab.c on coordinates near 1e-40). */
         float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
         mk[k] = m;
-        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, m * 0x1.0cp-23f);
+        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-148f));
         float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-147f, 0x1p-140f));
         float ord = p->org[k] * p->rd[k];
         p->ord_near[k] = ord + pad;

@@ -115,11 +115,10 @@ static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W,
     const float Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
     const float U = sh.U, V = sh.V, Wf = sh.W;
     float hA = fabsf(Ax) + fabsf(Ay), hB = fabsf(Bx) + fabsf(By), hC = fabsf(Cx) + fabsf(Cy);
-    float EU = fmaf(p->xK, hB + hC, p->xc0);
-    float EV = fmaf(p->xK, hA + hC, p->xc0);
-    float EW = fmaf(p->xK, hA + hB, p->xc0);
-    int pU = U > EU, pV = V > EV, pW = Wf > EW;
-    int nU = U < -EU, nV = V < -EV, nW = Wf < -EW;
+    /* one bound for the three edges (see SC_X_K606) */
+    float E1 = fmaf(p->xK, (hA + hB) + hC, p->xc0), nE1 = -E1;
+    int pU = U > E1, pV = V > E1, pW = Wf > E1;
+    int nU = U < nE1, nV = V < nE1, nW = Wf < nE1;
     *te = -1;
     if ((pU | pV | pW) & (nU | nV | nW))
         return 0;
@@ -130,10 +129,9 @@ static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W,
     float T = (U * Az + V * Bz) + Wf * Cz;
     float inv = 1.0f / det;
     float tt = T * inv;
-    float E = (EU + EV) + EW;
     float zmax = sc_fmax(sc_fmax(Az, Bz), Cz), zmin = sc_fmin(sc_fmin(Az, Bz), Cz);
     float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
-    float q = fmaf(R, E * SC_X_K202, SC_X_FLOOR_N);
+    float q = fmaf(R, E1 * SC_X_K606, SC_X_FLOOR_N);
     float e = fmaf(q, fabsf(inv), fmaf(Z, SC_X_K15U, fmaf(fabsf(tt), SC_X_K3U, SC_X_FLOOR_T)));
     if (!(e < INFINITY))
         return 1;

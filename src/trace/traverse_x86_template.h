@@ -56,7 +56,7 @@ static inline __attribute__((always_inline)) KATTR void KFN(ctx_fast)(KCTX *c, c
     const __m128 m = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_lo), o)),
                                 _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_hi), o)));
     const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
-                                  _mm_mul_ps(m, _mm_set1_ps(0x1.0cp-23f)));
+                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-148f)));
     const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
                                     _mm_fmadd_ps(m, _mm_set1_ps(0x1p-147f), _mm_set1_ps(0x1p-140f)));
     const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
@@ -270,19 +270,18 @@ KFN(exact8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned l
     __m256 hA = _mm256_add_ps(ABS(Ax), ABS(Ay));
     __m256 hB = _mm256_add_ps(ABS(Bx), ABS(By));
     __m256 hC = _mm256_add_ps(ABS(Cx), ABS(Cy));
-    __m256 EU = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hB, hC), c->xc0);
-    __m256 EV = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hA, hC), c->xc0);
-    __m256 EW = _mm256_fmadd_ps(c->xK, _mm256_add_ps(hA, hB), c->xc0);
+    __m256 E1 = _mm256_fmadd_ps(c->xK, _mm256_add_ps(_mm256_add_ps(hA, hB), hC), c->xc0);
+    __m256 nE1 = _mm256_xor_ps(E1, sgn);
 #if SC_X86_AVX512
-    __mmask8 pU = _mm256_cmp_ps_mask(U, EU, _CMP_GT_OQ), nU = _mm256_cmp_ps_mask(U, _mm256_xor_ps(EU, sgn), _CMP_LT_OQ);
-    __mmask8 pV = _mm256_cmp_ps_mask(V, EV, _CMP_GT_OQ), nV = _mm256_cmp_ps_mask(V, _mm256_xor_ps(EV, sgn), _CMP_LT_OQ);
-    __mmask8 pW = _mm256_cmp_ps_mask(Wv, EW, _CMP_GT_OQ), nW = _mm256_cmp_ps_mask(Wv, _mm256_xor_ps(EW, sgn), _CMP_LT_OQ);
+    __mmask8 pU = _mm256_cmp_ps_mask(U, E1, _CMP_GT_OQ), nU = _mm256_cmp_ps_mask(U, nE1, _CMP_LT_OQ);
+    __mmask8 pV = _mm256_cmp_ps_mask(V, E1, _CMP_GT_OQ), nV = _mm256_cmp_ps_mask(V, nE1, _CMP_LT_OQ);
+    __mmask8 pW = _mm256_cmp_ps_mask(Wv, E1, _CMP_GT_OQ), nW = _mm256_cmp_ps_mask(Wv, nE1, _CMP_LT_OQ);
     unsigned miss = (unsigned)((pU | pV | pW) & (nU | nV | nW));
     unsigned inside = (unsigned)((pU & pV & pW) | (nU & nV & nW));
 #else
-    __m256 pU = _mm256_cmp_ps(U, EU, _CMP_GT_OQ), nU = _mm256_cmp_ps(U, _mm256_xor_ps(EU, sgn), _CMP_LT_OQ);
-    __m256 pV = _mm256_cmp_ps(V, EV, _CMP_GT_OQ), nV = _mm256_cmp_ps(V, _mm256_xor_ps(EV, sgn), _CMP_LT_OQ);
-    __m256 pW = _mm256_cmp_ps(Wv, EW, _CMP_GT_OQ), nW = _mm256_cmp_ps(Wv, _mm256_xor_ps(EW, sgn), _CMP_LT_OQ);
+    __m256 pU = _mm256_cmp_ps(U, E1, _CMP_GT_OQ), nU = _mm256_cmp_ps(U, nE1, _CMP_LT_OQ);
+    __m256 pV = _mm256_cmp_ps(V, E1, _CMP_GT_OQ), nV = _mm256_cmp_ps(V, nE1, _CMP_LT_OQ);
+    __m256 pW = _mm256_cmp_ps(Wv, E1, _CMP_GT_OQ), nW = _mm256_cmp_ps(Wv, nE1, _CMP_LT_OQ);
     unsigned miss = KFN(mask8)(_mm256_and_ps(_mm256_or_ps(_mm256_or_ps(pU, pV), pW),
                                              _mm256_or_ps(_mm256_or_ps(nU, nV), nW)));
     unsigned inside = KFN(mask8)(_mm256_or_ps(_mm256_and_ps(_mm256_and_ps(pU, pV), pW),
@@ -299,11 +298,10 @@ KFN(exact8)(const KCTX *c, const float *rows, unsigned W, unsigned h, unsigned l
         /* one division: tt and the bound both use 1/det */
         __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
         __m256 tt = _mm256_mul_ps(T, inv);
-        __m256 E = _mm256_add_ps(_mm256_add_ps(EU, EV), EW);
         __m256 zmax = _mm256_max_ps(_mm256_max_ps(Az, Bz), Cz), zmin = _mm256_min_ps(_mm256_min_ps(Az, Bz), Cz);
         __m256 Z = _mm256_max_ps(zmax, _mm256_xor_ps(zmin, sgn));
         __m256 R = _mm256_mul_ps(_mm256_sub_ps(zmax, zmin), _mm256_set1_ps(0.5f));
-        __m256 q = _mm256_fmadd_ps(R, _mm256_mul_ps(E, _mm256_set1_ps(SC_X_K202)), _mm256_set1_ps(SC_X_FLOOR_N));
+        __m256 q = _mm256_fmadd_ps(R, _mm256_mul_ps(E1, _mm256_set1_ps(SC_X_K606)), _mm256_set1_ps(SC_X_FLOOR_N));
         __m256 e = _mm256_fmadd_ps(q, ABS(inv),
                                    _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_X_K15U),
                                                    _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_X_K3U),
