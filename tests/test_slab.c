@@ -11,7 +11,7 @@
  *     anywhere up to 1e18, directions 1e-18 .. 1e18 per component with random
  *     signs, nearly axis-aligned, at exactly 1e-18, and up to 3e38 (1/d
  *     subnormal: valid input too);
- *   - the whole node test (a copy of node_test_scalar) on 8-box nodes whose
+ *   - the whole node test (sc_slab, the scalar specification) on 8-box nodes whose
  *     boxes sit on a power-of-two lattice, so that rays can pass exactly
  *     through a corner, an edge point or a face point, graze an edge, or run
  *     along a face (origin on the face, that component tiny): every box the
@@ -71,27 +71,6 @@ static double now(void)
 }
 
 /* ---- the arithmetic under test --------------------------------------------- */
-
-/* A copy of node_test_scalar (src/trace/traverse_scalar.c), the
- * specification every SIMD kernel matches bit for bit; it is static there.
- * Keep it in step with the original. */
-static unsigned node_test_copy(const sc_ray_pre *p, const sc_bvh_node8 *node, float tmin, float tmax,
-                               float *dist)
-{
-    unsigned mask = 0;
-    for (int i = 0; i < SC_BVH_N; i++) {
-        float tn[3], tf[3];
-        for (int k = 0; k < 3; k++) {
-            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord_near[k]);
-            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord_far[k]);
-        }
-        float a = sc_fmax(sc_fmax(tn[0], tn[1]), sc_fmax(tn[2], tmin));
-        float b = sc_fmin(sc_fmin(tf[0], tf[1]), sc_fmin(tf[2], tmax));
-        dist[i] = a;
-        mask |= (unsigned)(a <= b) << i;
-    }
-    return mask;
-}
 
 /* The set-up the padding replaced: b = fl(o rd), no pad. */
 static void unpadded(sc_ray_pre *p)
@@ -544,8 +523,8 @@ static void check_nodes(uint64_t seed, size_t nodes, node_stats *st, size_t per_
         bare = pre;
         unpadded(&bare);
         float dist[SC_BVH_N], dist0[SC_BVH_N];
-        unsigned mask = node_test_copy(&pre, &node, r.tmin, r.tmax, dist);
-        unsigned mask0 = node_test_copy(&bare, &node, r.tmin, r.tmax, dist0);
+        unsigned mask = sc_slab(&pre, &node, r.tmin, r.tmax, dist);
+        unsigned mask0 = sc_slab(&bare, &node, r.tmin, r.tmax, dist0);
         st->nodes++;
         for (int i = 0; i < SC_BVH_N; i++) {
             float lo[3], hi[3];

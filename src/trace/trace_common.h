@@ -98,6 +98,24 @@ SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
     *xc0 = fmaf(S * S, SC_X_CS, 0x1p-124f);
 }
 
+/* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other
+ * two, swapped for d[kz] < 0 to keep the winding (matters only for
+ * one-sided tests). */
+SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, int *kz_out)
+{
+    int kz = 0;
+    if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
+    if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    *kx_out = kx, *ky_out = ky, *kz_out = kz;
+}
+
 /* root_lo/root_hi: the BVH's root box (ignored when it has none). */
 SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const float root_lo[3],
                                      const float root_hi[3])
@@ -135,21 +153,35 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
     p->tmin = r->tmin;
     p->tmax = r->tmax;
     const float *d = r->dir;
-    int kz = 0;
-    if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
-    if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
-    if (d[kz] < 0) {          /* keep the winding (matters only for one-sided tests) */
-        int t = kx;
-        kx = ky;
-        ky = t;
-    }
+    int kx, ky, kz;
+    sc_shear_axes(d, &kx, &ky, &kz);
     p->kx = kx, p->ky = ky, p->kz = kz;
     p->Sx = d[kx] / d[kz];
     p->Sy = d[ky] / d[kz];
     /* 1/d[kz] is rd[kz] unless that was clamped: one divide fewer */
     p->Sz = fabsf(d[kz]) >= SC_MIN_RCP_INPUT ? p->rd[kz] : 1.0f / d[kz];
+}
+
+/* The node test of non-parallel rays, the specification of the SIMD ones
+ * (padding: sc_ray_precompute). Near distances are lower and far distances
+ * upper bounds of the exact ones, so dist[i] is a lower bound of box i's
+ * exact entry distance. */
+SC_TRACE_INLINE unsigned sc_slab(const sc_ray_pre *p, const sc_bvh_node8 *node, float tmin, float tmax,
+                                 float *dist)
+{
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        float tn[3], tf[3];
+        for (int k = 0; k < 3; k++) {
+            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord_near[k]);
+            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord_far[k]);
+        }
+        float a = sc_fmax(sc_fmax(tn[0], tn[1]), sc_fmax(tn[2], tmin));
+        float b = sc_fmin(sc_fmin(tf[0], tf[1]), sc_fmin(tf[2], tmax));
+        dist[i] = a;
+        mask |= (unsigned)(a <= b) << i;
+    }
+    return mask;
 }
 
 /* The node test of parallel rays (Ize 2013 with IEEE infinities): a slab

@@ -21,20 +21,7 @@ static inline unsigned KFN(node_test)(const KCTX *c, const sc_bvh_node8 *node, f
                                       float *dist, const int OCT, const int WANT_DIST)
 {
     (void)OCT, (void)WANT_DIST;
-    const sc_ray_pre *p = c->p;
-    unsigned mask = 0;
-    for (int i = 0; i < SC_BVH_N; i++) {
-        float tn[3], tf[3];
-        for (int k = 0; k < 3; k++) {
-            tn[k] = fmaf(node->b[p->near_row[k]][i], p->rd[k], -p->ord_near[k]);
-            tf[k] = fmaf(node->b[p->far_row[k]][i], p->rd[k], -p->ord_far[k]);
-        }
-        float a = sc_fmax(sc_fmax(tn[0], tn[1]), sc_fmax(tn[2], tmin));
-        float b = sc_fmin(sc_fmin(tf[0], tf[1]), sc_fmin(tf[2], tmax));
-        dist[i] = a;
-        mask |= (unsigned)(a <= b) << i;
-    }
-    return mask;
+    return sc_slab(c->p, node, tmin, tmax, dist);
 }
 
 static inline unsigned KFN(node_test_par)(const KCTX *c, const sc_bvh_node8 *node, float tmin, float tmax,

@@ -72,16 +72,8 @@ static inline __attribute__((always_inline)) KATTR void KFN(ctx_fast)(KCTX *c, c
     c->xc0 = _mm256_set1_ps(xc0);
     /* the shear of the watertight test, as in sc_ray_precompute */
     const float *dd = r->dir;
-    int kz = 0;
-    if (fabsf(dd[1]) > fabsf(dd[kz])) kz = 1;
-    if (fabsf(dd[2]) > fabsf(dd[kz])) kz = 2;
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
-    if (dd[kz] < 0) {
-        int t = kx;
-        kx = ky;
-        ky = t;
-    }
+    int kx, ky, kz;
+    sc_shear_axes(dd, &kx, &ky, &kz);
     c->kx = kx, c->ky = ky, c->kz = kz;
     c->okx = _mm256_set1_ps(r->org[kx]);
     c->oky = _mm256_set1_ps(r->org[ky]);
