@@ -11,7 +11,7 @@
  * difference. Data stays in L1: these are lower bounds of both costs; in a
  * real tree each block also brings its cache lines (spheres: 16 B/triangle).
  *
- *   bench_leafcost [--isa avx2|avx512|scalar] [--iters N]
+ *   bench_leafcost [--isa scalar|sse4|avx2|avx512] [--iters N]
  */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_trace.h"
 
@@ -59,10 +60,11 @@ static double time_any(const sc_bvh *b, const sc_ray *r, long iters)
 
 int main(int argc, char **argv)
 {
-    sc_trace_isa isa = SC_TRACE_ISA_AUTO;
     long iters = 200000;
     for (int i = 1; i + 1 < argc; i += 2) {
-        if (strcmp(argv[i], "--isa") == 0 && sc_trace_isa_from_name(argv[i + 1], &isa) == SC_OK)
+        sc_isa isa;
+        if (strcmp(argv[i], "--isa") == 0 && sc_isa_from_name(argv[i + 1], &isa) == SC_OK &&
+            sc_isa_force(isa) == SC_OK)
             continue;
         if (strcmp(argv[i], "--iters") == 0 && (iters = atol(argv[i + 1])) > 0)
             continue;
@@ -83,12 +85,10 @@ int main(int argc, char **argv)
                 idx[3 * t + k] = (uint32_t)(3 * t + k);
         }
         double ns[3];
-        sc_trace_isa got = isa;
         for (int c = 0; c < 3; c++) {
             sc_bvh_config cfg;
             sc_bvh_config_default(&cfg);
             cfg.leaf_size = W;
-            cfg.isa = isa;
             cfg.prefilter = c == 0 ? SC_PREFILTER_OFF : SC_PREFILTER_MINIMAL;
             sc_bvh *b;
             if (sc_bvh_build(pos, (size_t)(3 * W), idx, (size_t)W, &cfg, &b) != SC_OK) {
@@ -97,7 +97,6 @@ int main(int argc, char **argv)
             }
             sc_bvh_info info;
             sc_bvh_get_info(b, &info);
-            got = info.isa;
             /* (0.75, 0.6): inside the circumcircle, outside the triangle;
              * (0.02, 0.84): inside the box, outside every sphere. */
             sc_ray r = { { c == 2 ? 0.02f : 0.75f, c == 2 ? 0.84f : 0.6f, 10 }, 0, { 0, 0, -1 }, INFINITY };
@@ -111,7 +110,7 @@ int main(int argc, char **argv)
             sc_bvh_free(b);
         }
         double ctri = ns[1] - ns[2], csph = ns[1] - ns[0];
-        printf("%3d   %-7s %8.2f %14.2f %8.2f %9.2f %9.2f %12.2f\n", W, sc_trace_isa_name(got), ns[0], ns[1], ns[2],
+        printf("%3d   %-7s %8.2f %14.2f %8.2f %9.2f %9.2f %12.2f\n", W, sc_isa_name(sc_isa_active()), ns[0], ns[1], ns[2],
                ctri, csph, csph / ctri);
     }
     return 0;

@@ -131,13 +131,15 @@ static void check_against_oracle(const scene_case *sc, const sc_hitrec *h, check
 
 static const int leaf_sizes[] = { 1, 4, 8, 16 };
 
-static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, sc_trace_isa isa, sc_tri_test tt)
+/* isa < 0: the level active now; otherwise every kernel is switched to it. */
+static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, int isa, sc_tri_test tt)
 {
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     cfg.leaf_size = leaf;
     cfg.prefilter = mode;
-    cfg.isa = isa;
+    if (isa >= 0)
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
     cfg.tri_test = tt;
     sc_bvh *bvh = NULL;
     assert_int_equal(sc_bvh_build(m->pos, m->nv, m->idx, m->nt, &cfg, &bvh), SC_OK);
@@ -166,7 +168,7 @@ static void run_scene(scene_case *sc)
     print_message("%s: %zu triangles, %zu rays, %zu robust oracle hits\n", sc->name, sc->m.nt, sc->nrays, robust);
     for (size_t li = 0; li < sizeof leaf_sizes / sizeof leaf_sizes[0]; li++) {
         for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode++) {
-            sc_bvh *bvh = build(&sc->m, leaf_sizes[li], (sc_prefilter_mode)mode, SC_TRACE_ISA_AUTO, SC_TRI_WATERTIGHT);
+            sc_bvh *bvh = build(&sc->m, leaf_sizes[li], (sc_prefilter_mode)mode, -1, SC_TRI_WATERTIGHT);
             sc_hitrec *cur = mode == 0 ? off : h;
             trace_all(bvh, sc, cur);
             char what[64];
@@ -290,13 +292,13 @@ static void test_isa_identical(void **state)
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++)
         for (size_t li = 0; li < 5; li++)
             for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode += 2) {
-                sc_bvh *b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, SC_TRACE_ISA_SCALAR, (sc_tri_test)tt);
+                sc_bvh *b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, SC_ISA_SCALAR, (sc_tri_test)tt);
                 trace_all(b, &sc, ref);
                 sc_bvh_free(b);
-                for (int isa = SC_TRACE_ISA_AVX2; isa < SC_TRACE_ISA_COUNT; isa++) {
-                    if (!sc_trace_isa_supported((sc_trace_isa)isa))
+                for (int isa = SC_ISA_SSE4; isa < SC_ISA_COUNT; isa++) {
+                    if (!sc_isa_supported((sc_isa)isa))
                         continue;
-                    b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, (sc_trace_isa)isa, (sc_tri_test)tt);
+                    b = build(&sc.m, leaves[li], (sc_prefilter_mode)mode, isa, (sc_tri_test)tt);
                     trace_all(b, &sc, h);
                     size_t diff = 0;
                     for (size_t i = 0; i < n; i++)
@@ -304,7 +306,7 @@ static void test_isa_identical(void **state)
                     if (diff)
                         print_message("%s leaf %d %s %s: %zu differ from scalar\n", sc_tri_test_name((sc_tri_test)tt),
                                       leaves[li], sc_prefilter_mode_name((sc_prefilter_mode)mode),
-                                      sc_trace_isa_name((sc_trace_isa)isa), diff);
+                                      sc_isa_name((sc_isa)isa), diff);
                     assert_int_equal(diff, 0);
                     sc_bvh_free(b);
                 }
@@ -327,7 +329,7 @@ static void test_brute_same_arithmetic(void **state)
     size_t n = 20000;
     make_rays(&sc, n, 18);
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
-        sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_MINIMAL, SC_TRACE_ISA_AUTO, (sc_tri_test)tt);
+        sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_MINIMAL, -1, (sc_tri_test)tt);
         for (size_t i = 0; i < n; i++) {
             sc_hitrec bh, th;
             assert_int_equal(sc_trace_closest_brute(b, &sc.rays[i], &bh), SC_OK);
@@ -349,7 +351,7 @@ static void test_moller(void **state)
     scene_soup(&sc.m, 3000, 0, 7);
     make_rays(&sc, NRAYS, 17);
     sc_hitrec *h = malloc(sc.nrays * sizeof *h);
-    sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_OFF, SC_TRACE_ISA_AUTO, SC_TRI_MOLLER);
+    sc_bvh *b = build(&sc.m, 4, SC_PREFILTER_OFF, -1, SC_TRI_MOLLER);
     trace_all(b, &sc, h);
     check_result res;
     check_against_oracle(&sc, h, &res, "moller");

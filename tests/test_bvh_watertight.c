@@ -70,8 +70,8 @@ static void run_case(const closed_case *cc)
     const int leaves[] = { 1, 4, 16 };
     const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_CIRCUM };
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++)
-        for (int isa = SC_TRACE_ISA_SCALAR; isa < SC_TRACE_ISA_COUNT; isa++) {
-            if (!sc_trace_isa_supported((sc_trace_isa)isa))
+        for (int isa = SC_ISA_SCALAR; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
                 continue;
             for (size_t li = 0; li < 3; li++)
                 for (size_t mi = 0; mi < 3; mi++) {
@@ -81,7 +81,7 @@ static void run_case(const closed_case *cc)
                     sc_bvh_config_default(&cfg);
                     cfg.leaf_size = leaves[li];
                     cfg.prefilter = modes[mi];
-                    cfg.isa = (sc_trace_isa)isa;
+                    assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                     cfg.tri_test = (sc_tri_test)tt;
                     sc_bvh *b;
                     assert_int_equal(sc_bvh_build(m.pos, m.nv, m.idx, m.nt, &cfg, &b), SC_OK);
@@ -97,7 +97,7 @@ static void run_case(const closed_case *cc)
                     if (tt == SC_TRI_MOLLER || holes || any_holes)
                         print_message("%s (%zu tris): %s %s leaf %d %s: %zu rays, holes %zu (any-hit %zu)\n",
                                       cc->name, m.nt, sc_tri_test_name((sc_tri_test)tt),
-                                      sc_trace_isa_name((sc_trace_isa)isa), leaves[li],
+                                      sc_isa_name((sc_isa)isa), leaves[li],
                                       sc_prefilter_mode_name(modes[mi]), n, holes, any_holes);
                     if (tt == SC_TRI_WATERTIGHT) {
                         assert_int_equal(holes, 0);

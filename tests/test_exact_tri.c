@@ -36,7 +36,7 @@
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
 #include "spherecull/sc_trace.h"
-#include "trace/exact_tri.h"
+#include "trace/tri_exact.h"
 
 #include "sc_test_meshes.h"
 
@@ -230,20 +230,20 @@ static void test_predicates_vs_mpfr(void **state)
             const float *P = v + 3 * ((e + 1) % 3), *Q = v + 3 * ((e + 2) % 3);
             int want = mp_vol_sign(&c.ray, P, Q);
             zeros += want == 0;
-            assert_int_equal(sc_x_vol_sign(&c.ray, P, Q), want);
+            assert_int_equal(sc_exact_vol_sign(&c.ray, P, Q), want);
         }
         int ha = mp_hit(&c.ray, v, ta);
         hits += ha;
-        assert_int_equal(sc_x_hit_exact(&c.ray, v), ha);
+        assert_int_equal(sc_exact_hit_test(&c.ray, v), ha);
         if (c.n > 1 && ha) {
             int hb = mp_hit(&c.ray, c.v[1], tb);
-            assert_int_equal(sc_x_hit_exact(&c.ray, c.v[1]), hb);
+            assert_int_equal(sc_exact_hit_test(&c.ray, c.v[1]), hb);
             if (hb) {
                 int want = mpfr_cmp(ta, tb);
                 want = (want > 0) - (want < 0);
                 ties += want == 0;
-                assert_int_equal(sc_x_cmp_t_exact(&c.ray, v, c.v[1]), want);
-                assert_int_equal(sc_x_cmp_t_exact(&c.ray, c.v[1], v), -want);
+                assert_int_equal(sc_exact_cmp_t(&c.ray, v, c.v[1]), want);
+                assert_int_equal(sc_exact_cmp_t(&c.ray, c.v[1], v), -want);
             }
         }
     }
@@ -285,13 +285,13 @@ static void test_tiny_scenes(void **state)
         make_config(&g, (int)i, &c);
         int best, tie[3];
         mp_closest(&c, &best, tie);
-        for (int isa = SC_TRACE_ISA_SCALAR; isa < SC_TRACE_ISA_COUNT; isa++) {
-            if (!sc_trace_isa_supported((sc_trace_isa)isa))
+        for (int isa = SC_ISA_SCALAR; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
                 continue;
             for (int tt = 0; tt < 2; tt++) {
                 sc_bvh_config cfg;
                 sc_bvh_config_default(&cfg);
-                cfg.isa = (sc_trace_isa)isa;
+                assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                 cfg.tri_test = tt ? SC_TRI_WATERTIGHT : SC_TRI_EXACT;
                 sc_bvh *b;
                 assert_int_equal(sc_bvh_build(&c.v[0][0], 3 * (size_t)c.n, idx, (size_t)c.n, &cfg, &b), SC_OK);
@@ -309,7 +309,7 @@ static void test_tiny_scenes(void **state)
                 checked++;
                 if (!ok)
                     print_message("config %zu (kind %zu) isa %s: prim %u occ %d, want %d\n", i, i % 6,
-                                  sc_trace_isa_name((sc_trace_isa)isa), h.prim, occ, best);
+                                  sc_isa_name((sc_isa)isa), h.prim, occ, best);
                 assert_true(ok);
                 if (best >= 0)
                     assert_true(h.t >= c.ray.tmin && h.t <= c.ray.tmax);
@@ -418,8 +418,8 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
         sc_bvh_free(b);
     }
     size_t configs = 0;
-    for (int isa = SC_TRACE_ISA_SCALAR; isa < SC_TRACE_ISA_COUNT; isa++) {
-        if (!sc_trace_isa_supported((sc_trace_isa)isa))
+    for (int isa = SC_ISA_SCALAR; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
             continue;
         for (int pm = 0; pm < SC_PREFILTER_MODE_COUNT; pm++)
             for (size_t li = 0; li < 3; li++) {
@@ -427,7 +427,7 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
                     continue;
                 sc_bvh_config cfg;
                 sc_bvh_config_default(&cfg);
-                cfg.isa = (sc_trace_isa)isa;
+                assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                 cfg.prefilter = (sc_prefilter_mode)pm;
                 cfg.leaf_size = LEAVES[li];
                 cfg.tri_test = SC_TRI_EXACT;
@@ -439,7 +439,7 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
                 if (configs++ == 0 || s.hit_miss || s.primid || s.any_wrong || s.t_bad)
                     print_message("%-22s exact %s %s leaf %2d: h/m %zu prim %zu any %zu t outside %zu, "
                                   "t rel. err max %.1e\n",
-                                  name, sc_trace_isa_name((sc_trace_isa)isa),
+                                  name, sc_isa_name((sc_isa)isa),
                                   sc_prefilter_mode_name((sc_prefilter_mode)pm), LEAVES[li], s.hit_miss, s.primid,
                                   s.any_wrong, s.t_bad, s.t_err);
                 assert_true(s.hits > 0);

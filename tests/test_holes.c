@@ -39,7 +39,7 @@
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
 #include "spherecull/sc_trace.h"
-#include "trace/trace_common.h"
+#include "trace/tri_watertight.h"
 
 #include "sc_test_meshes.h"
 
@@ -428,14 +428,14 @@ static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t se
         bt = brute_all(bvh, &set, NULL, set.count, 1);
         sc_bvh_free(bvh);
     }
-    for (int isa = SC_TRACE_ISA_SCALAR; isa < SC_TRACE_ISA_COUNT; isa++) {
-        if (!sc_trace_isa_supported((sc_trace_isa)isa))
+    for (int isa = SC_ISA_SCALAR; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
             continue;
         for (int pm = 0; pm < SC_PREFILTER_MODE_COUNT; pm++)
             for (size_t li = 0; li < 3; li++) {
                 sc_bvh_config cfg;
                 sc_bvh_config_default(&cfg);
-                cfg.isa = (sc_trace_isa)isa;
+                assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                 cfg.prefilter = (sc_prefilter_mode)pm;
                 cfg.leaf_size = leaves[li];
                 sc_bvh *bvh;

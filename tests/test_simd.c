@@ -31,7 +31,7 @@
 #include "sc_families.h"
 #include "sc_ref_ray.h"
 #include "sc_reference.h"
-#include "simd/sc_kernels.h"
+#include "isa/isa_dispatch.h"
 #include "spherecull/sc_simd.h"
 
 static sc_isa g_isa;
@@ -303,7 +303,7 @@ static void test_batch_double(void **state)
 /* ---- fast path against the general path --------------------------------- */
 
 /* Runs the active level's kernel on SoA copies of V (float or double). */
-static void kernel_f(const sc_kernels *k, float (*V)[3][3], size_t n, int method, int kind, unsigned flags,
+static void kernel_f(const sc_sphere_kernels *k, float (*V)[3][3], size_t n, int method, int kind, unsigned flags,
                      float *out, size_t pad)
 {
     float *in = malloc(sizeof(float) * 9 * (n ? n : 1));
@@ -321,7 +321,7 @@ static void kernel_f(const sc_kernels *k, float (*V)[3][3], size_t n, int method
     free(in);
 }
 
-static void kernel_d(const sc_kernels *k, double (*V)[3][3], size_t n, int method, int kind, unsigned flags,
+static void kernel_d(const sc_sphere_kernels *k, double (*V)[3][3], size_t n, int method, int kind, unsigned flags,
                      double *out, size_t pad)
 {
     double *in = malloc(sizeof(double) * 9 * (n ? n : 1));
@@ -347,7 +347,7 @@ static void test_fast_path_matches_general(void **state)
 {
     (void)state;
     NEED_ISA();
-    const sc_kernels *k = sc_kernels_for(g_isa);
+    const sc_sphere_kernels *k = sc_kernels_for(g_isa)->sphere;
     enum { PER = 120, N = PER * SC_FAM_COUNT };
     size_t pad = sc_simd_padded(N);
     sc_rng rng;
@@ -399,7 +399,7 @@ static void test_streaming_large_batch(void **state)
 {
     (void)state;
     NEED_ISA();
-    const sc_kernels *k = sc_kernels_for(g_isa);
+    const sc_sphere_kernels *k = sc_kernels_for(g_isa)->sphere;
     const size_t n = SC_STREAM_MIN_COUNT + 21, pad = sc_simd_padded(n);
     sc_rng rng;
     sc_rng_seed(&rng, 8);

@@ -1,5 +1,5 @@
 /* The BVH node (slab) test never culls a box the ray meets: the padding that
- * sc_ray_precompute (src/trace/trace_common.h) folds into ord_near/ord_far,
+ * sc_ray_precompute (src/trace/ray_setup.h) folds into ord_near/ord_far,
  * checked exactly with MPFR. Non-parallel rays only (every |d_k| >= 1e-18);
  * parallel rays take sc_slab_par.
  *
@@ -46,7 +46,7 @@
 #include <mpfr.h>
 
 #include "common/sc_rng.h"
-#include "trace/trace_common.h"
+#include "trace/node_bvh8_slab.h"
 
 /* floats span 2^-149 .. 2^128: p - o needs 278 bits, (p - o) * float and
  * float * float products below 560 bits of span */

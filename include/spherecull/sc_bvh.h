@@ -22,22 +22,16 @@
  *   auto     per leaf: minimal spheres are stored and used only where they are
  *            expected to pay. A block of spheres pays for a leaf iff
  *            s * C_tri > C_sph, where s is the fraction of the rays reaching
- *            the leaf that every sphere rejects (so the exact test is skipped)
- *            and C_tri, C_sph are the costs of the triangle and sphere block
- *            tests. Measured (bench/bench_leafcost, L1-resident, fastest of
- *            21 runs, EPYC): C_sph / C_tri = 1.4..2.1 for blocks of 4 and 8
- *            with AVX-512 (1.0..1.1 with AVX2): s would have to exceed 1, so
- *            such leaves never get spheres; for blocks of 16 (9..16
- *            triangles; the triangle test is two 8-wide passes, the sphere
- *            test one) it is 0.5..0.75. So leaves of 9..16 triangles shoot
+ *            the leaf that every sphere rejects (so the triangle test is
+ *            skipped) and C_tri, C_sph are the costs of the triangle and
+ *            sphere block tests (measured by bench/bench_leafcost.c; the
+ *            figures are in docs/compare.md). For blocks of 4 and 8 a sphere
+ *            block costs more than the triangle block it could skip, so such
+ *            leaves never get spheres; leaves of 9..16 triangles shoot
  *            SC_BVH_AUTO_SAMPLES isotropic random lines through their box at
  *            their spheres at build time and use them iff the fraction that
  *            all spheres reject is at least SC_BVH_AUTO_THRESHOLD16.
- *            Deterministic: the lines are seeded by leaf. On the shared
- *            meshes (bunny, armadillo, Sponza) this switches spheres on for
- *            0..1% of the leaves: the rule mostly says "off", which is what
- *            the end-to-end timings of circum/minimal (5..17% slower than
- *            off) say too.
+ *            Deterministic: the lines are seeded by leaf.
  * Every mode returns exactly the same hits; only the work differs.
  */
 #ifndef SPHERECULL_SC_BVH_H
@@ -54,7 +48,7 @@ extern "C" {
 
 #define SC_BVH_MAX_LEAF 16
 #define SC_BVH_AUTO_SAMPLES 32
-#define SC_BVH_AUTO_THRESHOLD16 0.75   /* the upper end of the measured C_sph / C_tri */
+#define SC_BVH_AUTO_THRESHOLD16 0.75   /* the upper end of the measured C_sph / C_tri for blocks of 16 */
 
 typedef enum sc_prefilter_mode {
     SC_PREFILTER_OFF = 0,
@@ -73,22 +67,10 @@ typedef enum sc_tri_test {
     SC_TRI_TEST_COUNT
 } sc_tri_test;
 
-/* Which kernel set traverses the tree. AUTO honours SPHERECULL_ISA
- * (scalar|sse4|avx2|avx512; sse4 maps to scalar here) and otherwise takes
- * the best the CPU supports. All kernels return bit-identical hits. */
-typedef enum sc_trace_isa {
-    SC_TRACE_ISA_AUTO = 0,
-    SC_TRACE_ISA_SCALAR,
-    SC_TRACE_ISA_AVX2,
-    SC_TRACE_ISA_AVX512,
-    SC_TRACE_ISA_COUNT
-} sc_trace_isa;
-
 typedef struct sc_bvh_config {
     int leaf_size;               /* 1..SC_BVH_MAX_LEAF: most triangles per leaf */
     sc_prefilter_mode prefilter;
     sc_tri_test tri_test;
-    sc_trace_isa isa;
     int sah_bins;                /* 4..64 */
     float traversal_cost;        /* SAH cost of a node visit, relative to one leaf block test */
 } sc_bvh_config;
@@ -106,7 +88,6 @@ typedef struct sc_bvh_info {
     int depth;                   /* of the 8-wide tree, root = 1 */
     double sah_cost;             /* of the 8-wide tree, in the config's cost units */
     double build_seconds;
-    sc_trace_isa isa;            /* the kernel set chosen */
     sc_prefilter_mode prefilter;
     int leaf_size;
 } sc_bvh_info;
@@ -118,23 +99,19 @@ void sc_bvh_config_default(sc_bvh_config *cfg);
 /* positions: 3 floats per vertex; indices: 3 per triangle, each < vertex_count.
  * triangle_count may be 0 (every ray misses).
  * Errors: INVALID_ARGUMENT (NULL, index out of range, bad config),
- * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY, UNSUPPORTED (the ISA
- * asked for is not available on this CPU). */
+ * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY.
+ * Which kernels traverse the tree is not the BVH's business: the ISA level
+ * (sc_isa.h) is chosen once for the whole library. */
 sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
                        size_t triangle_count, const sc_bvh_config *cfg, sc_bvh **out);
 void sc_bvh_free(sc_bvh *bvh);
 sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 
-/* "off", "circum", "minimal", "auto"; "watertight", "moller", "exact";
- * "auto", "scalar", "avx2", "avx512". */
+/* "off", "circum", "minimal", "auto"; "watertight", "moller", "exact". */
 const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
 sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);
 const char *sc_tri_test_name(sc_tri_test test);
 sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out);
-const char *sc_trace_isa_name(sc_trace_isa isa);
-sc_status sc_trace_isa_from_name(const char *name, sc_trace_isa *out);
-/* 1 if this CPU (and build) can run the kernel set. */
-int sc_trace_isa_supported(sc_trace_isa isa);
 
 #ifdef __cplusplus
 }

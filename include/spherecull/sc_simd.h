@@ -1,12 +1,7 @@
 /* spherecull — SIMD kernels with run-time dispatch: batch bounding spheres
  * and ray-vs-sphere reject masks on scalar, SSE4.1, AVX2+FMA and AVX-512.
  *
- * ISA selection. On first use the library picks the widest level this CPU
- * (and OS, via XGETBV) supports, or the level named by the environment
- * variable SPHERECULL_ISA=scalar|sse4|avx2|avx512. The choice is made once,
- * thread-safely, and switches every kernel together (batch spheres and the
- * sc_reject4/8/16 masks of sc_prefilter.h). The library never prints: call
- * sc_simd_init() to learn whether SPHERECULL_ISA was honoured.
+ * ISA selection: sc_isa.h (one choice for every kernel of the library).
  *
  * Batch spheres. Triangles come from a vertex buffer + index buffer or from
  * pre-gathered SoA arrays; spheres go to SoA arrays cx, cy, cz, r2 that the
@@ -43,42 +38,13 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "sc_circumsphere.h"
+#include "sc_isa.h"
 #include "sc_prefilter.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef enum sc_isa {
-    SC_ISA_SCALAR = 0,  /* the scalar specification, any CPU */
-    SC_ISA_SSE4,        /* SSE4.1, 4 float / 2 double lanes */
-    SC_ISA_AVX2,        /* AVX2 + FMA, 8 / 4 lanes */
-    SC_ISA_AVX512,      /* AVX-512 F + VL + DQ, 16 / 8 lanes */
-    SC_ISA_COUNT
-} sc_isa;
-
-/* "scalar", "sse4", "avx2", "avx512"; inverse returns SC_ERR_INVALID_ARGUMENT
- * for an unknown name. */
-const char *sc_isa_name(sc_isa isa);
-sc_status sc_isa_from_name(const char *name, sc_isa *out);
-
-/* 1 if this build has the level and this CPU and OS can run it. */
-int sc_isa_supported(sc_isa isa);
-
-/* Chooses the kernel table (once; later calls return the first result).
- * SC_OK: SPHERECULL_ISA unset or honoured. SC_ERR_INVALID_ARGUMENT: unknown
- * name. SC_ERR_UNSUPPORTED: the CPU or build lacks the named level. In both
- * error cases the kernels run at the widest supported level. */
-sc_status sc_simd_init(void);
-
-/* The level the kernels run at (initializes on first call). */
-sc_isa sc_isa_active(void);
-
-/* Switches every kernel to `isa` (for tests, benchmarks and the CLI's --isa;
- * not to be called while other threads run kernels). SC_ERR_UNSUPPORTED if
- * the CPU or build lacks it (the active level is then unchanged). */
-sc_status sc_isa_force(sc_isa isa);
 
 /* ---- batch spheres -------------------------------------------------------- */
 

@@ -33,6 +33,9 @@
  *                      A few percent slower on ordinary rays.
  *   SC_TRI_MOLLER      Moller-Trumbore 1997, not watertight, for comparison.
  *
+ * Kernels: those of the library's ISA level (sc_isa.h); every level returns
+ * bit-identical hits.
+ *
  * Statistics: pass a non-NULL sc_trace_stats to have the counters of this
  * ray ADDED to it (so one struct can sum a whole ray set). With NULL, a
  * separately compiled kernel without any counting runs: no cost.
@@ -43,6 +46,7 @@
 #include <stdint.h>
 
 #include "sc_bvh.h"
+#include "sc_isa.h"
 #include "sc_prefilter.h"
 #include "sc_rays.h"
 #include "sc_status.h"

@@ -33,6 +33,7 @@
 #endif
 
 #include "commands.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_rays.h"
 #include "spherecull/sc_scene.h"
@@ -63,7 +64,7 @@ static void usage(FILE *f)
             "  --prefilter LIST      off,circum,minimal,auto (default all)\n"
             "  --size WxH            image size of the primary rays (default 512x384)\n"
             "  --repeats R           paired repeats per measurement, median (default 5)\n"
-            "  --isa ISA             auto|scalar|avx2|avx512 (default auto)\n"
+            "  --isa ISA             auto|scalar|sse4|avx2|avx512: every kernel (default auto)\n"
             "  --embree MODE         default|robust: Embree scene flags (default default)\n"
             "  --triangle TEST       watertight|moller|exact: our triangle test (default watertight)\n"
             "  --trav-cost C         SAH cost of a node visit relative to a leaf block test\n"
@@ -296,7 +297,7 @@ typedef struct bench_opts {
     int leaves[MAX_LIST], nleaves;
     int modes[MAX_LIST], nmodes;
     int width, height, repeats;
-    sc_trace_isa isa;
+    int isa;             /* -1: auto */
     int embree_robust;
     float trav_cost;     /* < 0: the builder's default */
     sc_tri_test tri;
@@ -373,7 +374,6 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
      * ray set does not depend on whether Embree is built in. */
     sc_bvh_config rc_cfg;
     sc_bvh_config_default(&rc_cfg);
-    rc_cfg.isa = o->isa;
     if ((st = sc_bvh_build(v.positions, v.num_vertices, v.indices, ntri, &rc_cfg, &ref)) != SC_OK) {
         sc_cli_error(CMD, "%s: BVH build: %s", spec, sc_strerror(st));
         goto done;
@@ -438,7 +438,6 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
             sc_bvh_config_default(&cfg);
             cfg.leaf_size = o->leaves[li];
             cfg.prefilter = (sc_prefilter_mode)o->modes[mi];
-            cfg.isa = o->isa;
             cfg.tri_test = o->tri;
             if (o->trav_cost >= 0)
                 cfg.traversal_cost = o->trav_cost;
@@ -537,7 +536,7 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
                             "%s,%zu,%s,%zu,%d,%d,%s,%s,%.3f,%.3f,%.3f,%.2f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4f,%.4f,%.5f,"
                             "%.4f,%.4f,%zu,%zu,%.2f,%zu,%zu\n",
                             spec, ntri, kind_names[kind], n, thr, cfg.leaf_size, sc_prefilter_mode_name(cfg.prefilter),
-                            sc_trace_isa_name(info.isa), bpt, emb_bvh_bpt, emb_bpt, sph_pct, mo, me, rr, cr,
+                            sc_isa_name(sc_isa_active()), bpt, emb_bvh_bpt, emb_bpt, sph_pct, mo, me, rr, cr,
                             (double)stt.nodes / rays_d, (double)stt.leaves / rays_d,
                             (double)stt.sphere_tests / rays_d, (double)stt.sphere_rejects / rays_d,
                             (double)stt.tri_tests / rays_d, (double)stt.tri_hits / rays_d,
@@ -575,7 +574,7 @@ int sc_cmd_bench(int argc, char **argv)
         o.modes[m] = m;
     o.nmodes = SC_PREFILTER_MODE_COUNT;
     o.width = 512, o.height = 384, o.repeats = 5;
-    o.isa = SC_TRACE_ISA_AUTO;
+    o.isa = -1;
     o.trav_cost = -1;
     o.tri = SC_TRI_WATERTIGHT;
     const char *csv_path = NULL;
@@ -636,8 +635,8 @@ int sc_cmd_bench(int argc, char **argv)
             bad = *end || r < 1 || r > MAX_REPEATS;
             o.repeats = (int)r;
         } else if (strcmp(a, "--isa") == 0) {
-            bad = sc_trace_isa_from_name(val, &o.isa) != SC_OK;
-            if (!bad && !sc_trace_isa_supported(o.isa)) {
+            bad = sc_cli_parse_isa(val, &o.isa) != 0;
+            if (!bad && o.isa >= 0 && sc_isa_force((sc_isa)o.isa) != SC_OK) {
                 sc_cli_error(CMD, "ISA '%s' is not supported by this CPU", val);
                 return 2;
             }
@@ -674,19 +673,6 @@ int sc_cmd_bench(int argc, char **argv)
 
     char cpu[256];
     cpu_name(cpu, sizeof cpu);
-    sc_trace_isa isa = o.isa;
-    if (isa == SC_TRACE_ISA_AUTO) {
-        /* What a build with AUTO will pick (SPHERECULL_ISA, then the CPU). */
-        sc_bvh *probe = NULL;
-        sc_bvh_config pc;
-        sc_bvh_config_default(&pc);
-        if (sc_bvh_build(NULL, 0, NULL, 0, &pc, &probe) == SC_OK) {
-            sc_bvh_info pi;
-            sc_bvh_get_info(probe, &pi);
-            isa = pi.isa;
-            sc_bvh_free(probe);
-        }
-    }
 #if defined(__clang__)
     printf("# compiler: clang %s\n", __clang_version__);
 #elif defined(__GNUC__)
@@ -695,7 +681,7 @@ int sc_cmd_bench(int argc, char **argv)
     printf("# compiler: unknown\n");
 #endif
     printf("# cpu: %s (%ld online)\n", cpu, sysconf(_SC_NPROCESSORS_ONLN));
-    printf("# isa: %s (tracer kernels)\n", sc_trace_isa_name(isa));
+    printf("# isa: %s (every kernel)\n", sc_isa_name(sc_isa_active()));
     printf("# threads:");
     for (int i = 0; i < o.nthreads; i++)
         printf("%s%d", i ? "," : " ", o.threads[i]);

@@ -15,7 +15,7 @@
 #include "common/sc_rng.h"
 #include "sc_families.h"
 #include "sc_reference.h"
-#include "simd/sc_kernels.h"
+#include "isa/isa_dispatch.h"
 #include "x86/cpu_features.h"
 
 static const char *CMD = "bench-spheres";
@@ -71,9 +71,9 @@ static void run_job(const job *j)
     if (j->copy_bytes)
         memcpy(j->copy_dst, j->copy_src, j->copy_bytes);
     else if (j->dbl)
-        j->k->spheres_d(&j->sd, j->count, j->method, j->kind, j->flags, &j->od);
+        j->k->sphere->spheres_d(&j->sd, j->count, j->method, j->kind, j->flags, &j->od);
     else
-        j->k->spheres_f(&j->sf, j->count, j->method, j->kind, j->flags, &j->of);
+        j->k->sphere->spheres_f(&j->sf, j->count, j->method, j->kind, j->flags, &j->of);
 }
 
 /* Seconds per call: the best of `reps` samples, each at least min_time
@@ -294,9 +294,9 @@ static void measure_error(const errset *e, const sc_kernels *k, int dbl, int met
     sc_spheres_soaf oF = { of, of + pad, of + 2 * pad, of + 3 * pad };
     sc_spheres_soad oD = { od, od + pad, od + 2 * pad, od + 3 * pad };
     if (dbl)
-        k->spheres_d(&sd, n, method, kind, 0, &oD);
+        k->sphere->spheres_d(&sd, n, method, kind, 0, &oD);
     else
-        k->spheres_f(&sf, n, method, kind, 0, &oF);
+        k->sphere->spheres_f(&sf, n, method, kind, 0, &oF);
     double *errs = malloc(sizeof(double) * n);
     int m = 0;
     for (size_t t = 0; t < n; t++) {
@@ -348,14 +348,14 @@ static double time_reject(const sc_kernels *k, int width, int packet, int quick)
         do {
             for (int b = 0; b < NB; b++) {
                 if (packet)
-                    acc += width == 8 ? k->packet8((const sc_ray_packet8 *)&pk[b], c, 0.05f)
-                                      : k->packet16(&pk[b], c, 0.05f);
+                    acc += width == 8 ? k->sphere->packet8((const sc_ray_packet8 *)&pk[b], c, 0.05f)
+                                      : k->sphere->packet16(&pk[b], c, 0.05f);
                 else if (width == 4)
-                    acc += k->reject4(&ray, (const sc_sphere_block4 *)&blk[b]);
+                    acc += k->sphere->reject4(&ray, (const sc_sphere_block4 *)&blk[b]);
                 else if (width == 8)
-                    acc += k->reject8(&ray, (const sc_sphere_block8 *)&blk[b]);
+                    acc += k->sphere->reject8(&ray, (const sc_sphere_block8 *)&blk[b]);
                 else
-                    acc += k->reject16(&ray, &blk[b]);
+                    acc += k->sphere->reject16(&ray, &blk[b]);
             }
             calls += NB;
             el = now() - t0;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_image.h"
 #include "spherecull/sc_render.h"
@@ -30,7 +31,7 @@ static void help(FILE *f)
             "  --prefilter MODE      off | circum | minimal | auto (default auto)\n"
             "  --leaf N              triangles per BVH leaf, 1..%d (default 8)\n"
             "  --threads N           render threads (default: all)\n"
-            "  --isa ISA             auto | scalar | avx2 | avx512 (default auto)\n"
+            "  --isa ISA             auto | scalar | sse4 | avx2 | avx512: every kernel (default auto)\n"
             "  --triangle TEST       watertight | moller | exact (default watertight)\n"
             "  --ao N                ambient-occlusion samples per pixel (default 0)\n"
             "  --seed S              seed for AO directions (default 1)\n"
@@ -94,7 +95,7 @@ int sc_cmd_render(int argc, char **argv)
     unsigned long long seed = 1, max_tris = 0;
     int stats_on = 0, quiet = 0, shadows = 1;
     sc_prefilter_mode prefilter = SC_PREFILTER_AUTO;
-    sc_trace_isa isa = SC_TRACE_ISA_AUTO;
+    int isa = -1;   /* auto: SPHERECULL_ISA or the widest level */
     sc_tri_test tri = SC_TRI_WATERTIGHT;
     sc_render_debug debug = SC_RENDER_SHADED;
 
@@ -136,8 +137,8 @@ int sc_cmd_render(int argc, char **argv)
             }
             i++;
         } else if (!strcmp(a, "--isa")) {
-            if (!val || sc_trace_isa_from_name(val, &isa) != SC_OK) {
-                sc_cli_error(CMD, "--isa takes auto, scalar, avx2 or avx512");
+            if (!val || sc_cli_parse_isa(val, &isa) != 0) {
+                sc_cli_error(CMD, "--isa takes auto, scalar, sse4, avx2 or avx512");
                 return 2;
             }
             i++;
@@ -191,8 +192,8 @@ int sc_cmd_render(int argc, char **argv)
         sc_cli_error(CMD, "no scene given (try --help)");
         return 2;
     }
-    if (!sc_trace_isa_supported(isa)) {
-        sc_cli_error(CMD, "this CPU cannot run the %s kernels", sc_trace_isa_name(isa));
+    if (isa >= 0 && sc_isa_force((sc_isa)isa) != SC_OK) {
+        sc_cli_error(CMD, "this CPU cannot run the %s kernels", sc_isa_name((sc_isa)isa));
         return 1;
     }
 
@@ -232,7 +233,6 @@ int sc_cmd_render(int argc, char **argv)
     sc_bvh_config_default(&cfg);
     cfg.leaf_size = (int)leaf;
     cfg.prefilter = prefilter;
-    cfg.isa = isa;
     cfg.tri_test = tri;
     sc_bvh *bvh = NULL;
     st = sc_bvh_build(view.positions, view.num_vertices, view.indices, view.num_triangles, &cfg, &bvh);
@@ -281,7 +281,7 @@ int sc_cmd_render(int argc, char **argv)
         sc_scene_get_stats(scene, &ss);
         printf("%s: %zu triangles (scene %.1f B/tri), BVH %.3f s (leaf %d, prefilter %s, %s, %.1f B/tri)",
                scene_path, ss.triangles, ss.bytes_per_triangle, info.build_seconds, info.leaf_size,
-               sc_prefilter_mode_name(info.prefilter), sc_trace_isa_name(info.isa),
+               sc_prefilter_mode_name(info.prefilter), sc_isa_name(sc_isa_active()),
                info.triangles ? (double)info.total_bytes / (double)info.triangles : 0.0);
         uint64_t rays = rs.primary_rays + rs.shadow_rays + rs.ao_rays;
         printf(", %.2f M rays in %.3f s = %.2f Mrays/s%s", (double)rays * 1e-6, rs.seconds,

@@ -36,4 +36,8 @@ int sc_cli_check_output(const char *command, const char *option, const char *pat
  * write_fn returns 0 on success. */
 int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx);
 
+/* --isa: "auto" gives -1 (keep the library's choice), a level name its
+ * sc_isa value. Returns 0, or -1 for an unknown name. */
+int sc_cli_parse_isa(const char *name, int *isa);
+
 #endif

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "spherecull/sc_isa.h"
 
 /* One row per subcommand; each subsystem adds its own. */
 static const sc_command commands[] = {
@@ -124,4 +125,17 @@ int main(int argc, char **argv)
             return commands[i].run(argc - 1, argv + 1);
     fprintf(stderr, "spherecull: unknown command '%s' (try 'spherecull --help')\n", argv[1]);
     return 2;
+}
+
+int sc_cli_parse_isa(const char *name, int *isa)
+{
+    sc_isa v;
+    if (name && strcmp(name, "auto") == 0) {
+        *isa = -1;
+        return 0;
+    }
+    if (sc_isa_from_name(name, &v) != SC_OK)
+        return -1;
+    *isa = (int)v;
+    return 0;
 }

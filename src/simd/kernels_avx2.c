@@ -8,7 +8,7 @@
 #define SC_VEC_F32X8
 #define SC_VEC_F64X4
 #include "simd_vec.h"
-#include "sc_kernels.h"
+#include "sphere_kernels.h"
 
 #define ATTR SC_ATTR_AVX2
 
@@ -118,8 +118,8 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define PFUNC packet16_avx2
 #include "reject_template.h"
 
-const sc_kernels sc_kernels_avx2 = {
-    SC_ISA_AVX2, spheres_f_avx2, spheres_d_avx2, reject4_avx2, reject8_avx2, reject16_avx2,
+const sc_sphere_kernels sc_sphere_kernels_avx2 = {
+    spheres_f_avx2, spheres_d_avx2, reject4_avx2, reject8_avx2, reject16_avx2,
     packet8_avx2, packet16_avx2,
 };
 #endif

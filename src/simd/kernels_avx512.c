@@ -9,7 +9,7 @@
 #define SC_VEC_F32X16
 #define SC_VEC_F64X8
 #include "simd_vec.h"
-#include "sc_kernels.h"
+#include "sphere_kernels.h"
 
 #define ATTR SC_ATTR_AVX512
 
@@ -119,8 +119,8 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define PFUNC packet16_avx512
 #include "reject_template.h"
 
-const sc_kernels sc_kernels_avx512 = {
-    SC_ISA_AVX512, spheres_f_avx512, spheres_d_avx512, reject4_avx512, reject8_avx512,
+const sc_sphere_kernels sc_sphere_kernels_avx512 = {
+    spheres_f_avx512, spheres_d_avx512, reject4_avx512, reject8_avx512,
     reject16_avx512, packet8_avx512, packet16_avx512,
 };
 #endif

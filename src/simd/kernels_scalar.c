@@ -2,7 +2,7 @@
  * sphere at a time. Fallback on every CPU and the baseline of the benchmark. */
 #include <math.h>
 
-#include "sc_kernels.h"
+#include "sphere_kernels.h"
 
 #define DEFINE_SPHERES(SUF, REAL, SPHERE, SOURCE, SOA)                                        \
     static size_t spheres_##SUF##_scalar(const SOURCE *src, size_t count, int method, int kind, \
@@ -82,7 +82,7 @@ DEFINE_REJECT(16)
 DEFINE_PACKET(8)
 DEFINE_PACKET(16)
 
-const sc_kernels sc_kernels_scalar = {
-    SC_ISA_SCALAR, spheres_f_scalar, spheres_d_scalar, reject4_scalar, reject8_scalar,
+const sc_sphere_kernels sc_sphere_kernels_scalar = {
+    spheres_f_scalar, spheres_d_scalar, reject4_scalar, reject8_scalar,
     reject16_scalar, packet8_scalar, packet16_scalar,
 };

@@ -7,7 +7,7 @@
 #define SC_VEC_F32X4
 #define SC_VEC_F64X2
 #include "simd_vec.h"
-#include "sc_kernels.h"
+#include "sphere_kernels.h"
 
 #define ATTR SC_ATTR_SSE4
 
@@ -55,8 +55,8 @@
 #define PFUNC packet16_sse4
 #include "reject_template.h"
 
-const sc_kernels sc_kernels_sse4 = {
-    SC_ISA_SSE4, spheres_f_sse4, spheres_d_sse4, reject4_sse4, reject8_sse4, reject16_sse4,
+const sc_sphere_kernels sc_sphere_kernels_sse4 = {
+    spheres_f_sse4, spheres_d_sse4, reject4_sse4, reject8_sse4, reject16_sse4,
     packet8_sse4, packet16_sse4,
 };
 #endif

@@ -6,6 +6,9 @@
  *   ATTR    the ISA's target attribute
  *   RFUNC   name of the ray-vs-block kernel;  PFUNC  of the sphere-vs-packet
  *           kernel (optional, W = 8 or 16 only)
+ *   RQUAL   optional: the ray-vs-block kernel's qualifiers and attributes
+ *           (default static ATTR); the traversal (src/trace) compiles it
+ *           always-inline so that no call sits in its leaf loop
  *
  * The arithmetic is sc_ray_sphere_reject's, operation for operation and
  * without FMA, so every lane agrees with the scalar specification bit for
@@ -17,6 +20,11 @@
 #define RV(op) RCAT(VP, op)
 #define RGLUE_(a, b) a##b
 #define RGLUE(a, b) RGLUE_(a, b)
+#ifdef RQUAL
+#define RQ_ RQUAL
+#else
+#define RQ_ static ATTR
+#endif
 
 /* Lanes of one chunk; O, D, tmin, tmax and c, r2 may each be per lane or
  * broadcast. dd, tmin*dd, |tmin|*dd, tmax*dd, |tmax|*dd come in precomputed
@@ -52,7 +60,7 @@ static inline ATTR uint32_t RCAT(RFUNC, lanes)(RV(t) ox, RV(t) oy, RV(t) oz, RV(
     return RV(bits)(RV(or)(empty, RV(and)(trusted, rej)));
 }
 
-static ATTR uint32_t RFUNC(const sc_ray *ray, const RGLUE(sc_sphere_block, W) *blk)
+RQ_ uint32_t RFUNC(const sc_ray *ray, const RGLUE(sc_sphere_block, W) *blk)
 {
     const float *O = ray->org, *D = ray->dir;
     float dd = D[0] * D[0] + D[1] * D[1] + D[2] * D[2];
@@ -92,3 +100,4 @@ static ATTR uint32_t PFUNC(const RGLUE(sc_ray_packet, W) *rays, const float c[3]
 #undef RV
 #undef RGLUE_
 #undef RGLUE
+#undef RQ_

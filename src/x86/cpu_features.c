@@ -29,6 +29,8 @@ static uint32_t detect(void)
     cpuid(1, 0, r);
     if (r[2] & (1u << 19))
         f |= SC_X86_SSE41;
+    if (r[2] & (1u << 23))
+        f |= SC_X86_POPCNT;
     int osxsave = (r[2] >> 27) & 1;
     int avx = (r[2] >> 28) & 1, fma = (r[2] >> 12) & 1;
     uint64_t xcr0 = osxsave ? xgetbv0() : 0;
@@ -42,12 +44,22 @@ static uint32_t detect(void)
         cpuid(7, 0, r);
         if (((r[1] >> 5) & 1) && ymm_ok)
             f |= SC_X86_AVX2;
+        if ((r[1] >> 3) & 1)
+            f |= SC_X86_BMI1;
+        if ((r[1] >> 8) & 1)
+            f |= SC_X86_BMI2;
         if (zmm_ok) {
             if ((r[1] >> 16) & 1) f |= SC_X86_AVX512F;
             if ((r[1] >> 17) & 1) f |= SC_X86_AVX512DQ;
             if ((r[1] >> 30) & 1) f |= SC_X86_AVX512BW;
             if ((r[1] >> 31) & 1) f |= SC_X86_AVX512VL;
         }
+    }
+    cpuid(0x80000000u, 0, r);
+    if (r[0] >= 0x80000001u) {
+        cpuid(0x80000001u, 0, r);
+        if ((r[2] >> 5) & 1)
+            f |= SC_X86_LZCNT;
     }
     return f;
 }

@@ -15,6 +15,10 @@ enum {
     SC_X86_AVX512VL = 1u << 5,
     SC_X86_AVX512DQ = 1u << 6,
     SC_X86_AVX512BW = 1u << 7,
+    SC_X86_POPCNT   = 1u << 8,
+    SC_X86_LZCNT    = 1u << 9,
+    SC_X86_BMI1     = 1u << 10,
+    SC_X86_BMI2     = 1u << 11,
 };
 
 /* Bit set of SC_X86_*; 0 on other architectures. Cheap after the first call. */

@@ -22,19 +22,17 @@
  * found first is kept (all of them are in the oracle's tie set).
  * libc and libm only.
  */
-#ifndef SPHERECULL_TRACE_EXACT_TRI_H
-#define SPHERECULL_TRACE_EXACT_TRI_H
+#ifndef SPHERECULL_TRACE_TRI_EXACT_H
+#define SPHERECULL_TRACE_TRI_EXACT_H
 
 #include <math.h>
 #include <stdint.h>
 
-#include "spherecull/sc_rays.h"
-
-/* The ray as given (not the precomputed, clamped copy the box tests use). */
-typedef sc_ray sc_xray;
+#include "spherecull/sc_prefilter.h"
+#include "tri_watertight.h"
 
 /* One accepted hit, or the current closest. lo <= exact t <= hi always. */
-typedef struct sc_xhit {
+typedef struct sc_exact_hit {
     int have;
     int refined;            /* lo, hi come from the double filter (tighter) */
     uint32_t prim;
@@ -42,38 +40,38 @@ typedef struct sc_xhit {
     unsigned W, lane;
     float lo, hi;
     float t, u, v;          /* reported: t (in [tmin, tmax]) and barycentrics */
-} sc_xhit;
+} sc_exact_hit;
 
 /* The float filter of the scalar and SIMD kernels (u = 2^-24): with the
  * sheared float coordinates Px, Py of a vertex P, h = |Px| + |Py|, an edge
  * function over vertices P, Q is certain iff its magnitude exceeds
  *   E = K (hP + hQ) + c0,
  * K and c0 per ray from S >= the largest L1 distance of the BVH's root box
- * from the origin (sc_ray_pre_exact), and on a lane with three certain
+ * from the origin (sc_exact_consts in ray_setup.h), and on a lane with three certain
  * edges of one sign t = T fl(1/det) is within
- *   te = (R * SC_X_K202 * (E1+E2+E3) + SC_X_FLOOR_N) |fl(1/det)|
- *        + Z * SC_X_K15U + |t| * SC_X_K3U + SC_X_FLOOR_T
+ *   te = (R * SC_EXACT_K202 * (E1+E2+E3) + SC_EXACT_FLOOR_N) |fl(1/det)|
+ *        + Z * SC_EXACT_K15U + |t| * SC_EXACT_K3U + SC_EXACT_FLOOR_T
  * of the exact t, with zi = Sz z_i (the vertices' t along the ray),
  * Z = max |zi| and R = (max zi - min zi) / 2 (the spread: barycentric
  * errors sum to zero, so they only move t within the triangle's depth).
- * The derivation is in exact_tri.c. */
-#define SC_X_K202 (2.02f)
+ * The derivation is in tri_exact.c. */
+#define SC_EXACT_K202 (2.02f)
 /* The kernels use one bound per lane for all three edges,
  * E1 = K (hA + hB + hC) + c0 >= each edge's E: the edge sum of the t bound is
- * then at most 3 E1, and SC_X_K606 = 3 SC_X_K202. Looser by at most 2x, which
- * only sends a few more lanes to sc_xresolve; six operations fewer per leaf. */
-#define SC_X_K606 (6.06f)
-#define SC_X_FLOOR_N (0x1p-146f)
-#define SC_X_K15U (15.0f * 0x1p-24f)
-#define SC_X_K3U (3.0f * 0x1p-24f)
-#define SC_X_FLOOR_T (0x1p-120f)
+ * then at most 3 E1, and SC_EXACT_K606 = 3 SC_EXACT_K202. Looser by at most 2x, which
+ * only sends a few more lanes to sc_exact_resolve; six operations fewer per leaf. */
+#define SC_EXACT_K606 (6.06f)
+#define SC_EXACT_FLOOR_N (0x1p-146f)
+#define SC_EXACT_K15U (15.0f * 0x1p-24f)
+#define SC_EXACT_K3U (3.0f * 0x1p-24f)
+#define SC_EXACT_FLOOR_T (0x1p-120f)
 
 /* The common case, inline in the kernels: a lane whose float filter
  * certified the edges (te >= 0). Since te >= 3u|t|, fl(t - 2te) <= t - te
  * and fl(t + 2te) >= t + te, so [lo, hi] below holds the exact t. Returns 1
  * when that decides the lane (*take: it is the new closest), 0 when
- * sc_xresolve must (a range or order too close to call in float). */
-static inline int sc_xfast(const sc_xray *r, float t, float te, const sc_xhit *best, int *take, float *lo,
+ * sc_exact_resolve must (a range or order too close to call in float). */
+static inline int sc_exact_fast(const sc_ray *r, float t, float te, const sc_exact_hit *best, int *take, float *lo,
                            float *hi)
 {
     float L = t - 2 * te, H = t + 2 * te;
@@ -95,26 +93,66 @@ static inline int sc_xfast(const sc_xray *r, float t, float te, const sc_xhit *b
  * undecided. With
  * any != 0 returns 1 at the first exact hit in [tmin, tmax]; otherwise
  * updates *best and returns the number of exact hits in [tmin, tmax]. */
-__attribute__((cold)) unsigned sc_xresolve(const sc_xray *r, const float *rows, unsigned W, unsigned cand, const float *t,
+__attribute__((cold)) unsigned sc_exact_resolve(const sc_ray *r, const float *rows, unsigned W, unsigned cand, const float *t,
                      const float *te, const float *un, const float *vn, const float *den, int any,
-                     sc_xhit *best);
+                     sc_exact_hit *best);
 
 /* The float t of a certified lane can be far from the exact one when the
  * ray grazes the triangle (wide [lo, hi]); then the reported t, u, v are
  * recomputed in double. Called once per ray on the final closest hit. */
-__attribute__((cold)) void sc_xhit_report(const sc_xray *r, sc_xhit *best);
-static inline void sc_xhit_finish(const sc_xray *r, sc_xhit *best)
+__attribute__((cold)) void sc_exact_report(const sc_ray *r, sc_exact_hit *best);
+static inline void sc_exact_finish(const sc_ray *r, sc_exact_hit *best)
 {
     if (best->have && !(best->hi - best->lo <= 0x1p-12f * fabsf(best->t)))
-        sc_xhit_report(r, best);
+        sc_exact_report(r, best);
 }
 
 /* Exact primitives, exposed for the tests. v = A, B, C (9 floats). */
 /* sign of D.((P-O) x (Q-O)) */
-int sc_x_vol_sign(const sc_xray *r, const float P[3], const float Q[3]);
+int sc_exact_vol_sign(const sc_ray *r, const float P[3], const float Q[3]);
 /* 1 iff the ray hits the triangle in [tmin, tmax] (the oracle's rule) */
-int sc_x_hit_exact(const sc_xray *r, const float v[9]);
+int sc_exact_hit_test(const sc_ray *r, const float v[9]);
 /* sign of t(a) - t(b) for two triangles whose planes the ray crosses */
-int sc_x_cmp_t_exact(const sc_xray *r, const float a[9], const float b[9]);
+int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
+
+/* The float filter of the exact test (SC_TRI_EXACT): the watertight
+ * arithmetic plus the forward error bounds of tri_exact.h. Returns 0 for a
+ * certain miss (two edges of certainly opposite signs, or t certainly
+ * outside [tmin, tmax]); 1 leaves the lane to sc_exact_resolve, with te >= 0 and
+ * t, un, vn and den = 1/det set when all three edges are certain (inside),
+ * te = -1 otherwise. Every SIMD kernel computes the same bits. */
+SC_TRACE_INLINE int sc_tri_exact_filter(const sc_ray_pre *p, const float *rows, unsigned W, unsigned i, float tmin,
+                             float tmax, float *t, float *te, float *un, float *vn, float *den)
+{
+    sc_tri_sheared sh;
+    sc_tri_shear(p, rows, W, i, &sh);
+    const float Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
+    const float U = sh.U, V = sh.V, Wf = sh.W;
+    float hA = fabsf(Ax) + fabsf(Ay), hB = fabsf(Bx) + fabsf(By), hC = fabsf(Cx) + fabsf(Cy);
+    /* one bound for the three edges (see SC_EXACT_K606) */
+    float E1 = fmaf(p->xK, (hA + hB) + hC, p->xc0), nE1 = -E1;
+    int pU = U > E1, pV = V > E1, pW = Wf > E1;
+    int nU = U < nE1, nV = V < nE1, nW = Wf < nE1;
+    *te = -1;
+    if ((pU | pV | pW) & (nU | nV | nW))
+        return 0;
+    if (!((pU & pV & pW) | (nU & nV & nW)))
+        return 1;
+    float Az = p->Sz * sh.Akz, Bz = p->Sz * sh.Bkz, Cz = p->Sz * sh.Ckz;
+    float det = (U + V) + Wf;
+    float T = (U * Az + V * Bz) + Wf * Cz;
+    float inv = 1.0f / det;
+    float tt = T * inv;
+    float zmax = sc_fmax(sc_fmax(Az, Bz), Cz), zmin = sc_fmin(sc_fmin(Az, Bz), Cz);
+    float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
+    float q = fmaf(R, E1 * SC_EXACT_K606, SC_EXACT_FLOOR_N);
+    float e = fmaf(q, fabsf(inv), fmaf(Z, SC_EXACT_K15U, fmaf(fabsf(tt), SC_EXACT_K3U, SC_EXACT_FLOOR_T)));
+    if (!(e < INFINITY))
+        return 1;
+    if (tt - e > tmax || tt + e < tmin)
+        return 0;
+    *t = tt, *te = e, *un = V, *vn = Wf, *den = inv;
+    return 1;
+}
 
 #endif

@@ -1,5 +1,5 @@
 /* Exact-decision triangle test: the double filter, the exact fixed-point
- * fallback and the per-leaf resolution (see exact_tri.h).
+ * fallback and the per-leaf resolution (see tri_exact.h).
  *
  * Why the float filter of the kernels is rigorous (u = 2^-24, first-order
  * terms with their second-order slack folded into the constants):
@@ -34,7 +34,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "exact_tri.h"
+#include "tri_exact.h"
 
 /* ---- exact fixed point ---------------------------------------------------- */
 
@@ -224,7 +224,7 @@ typedef struct xin {
     xf o[3], d[3], v[3][3];
 } xin;
 
-static void xin_init(xin *in, const sc_xray *r, const float v[9])
+static void xin_init(xin *in, const sc_ray *r, const float v[9])
 {
     for (int k = 0; k < 3; k++) {
         in->o[k] = fdec(r->org[k]);
@@ -281,7 +281,7 @@ static int cmp_num_fden(const xint *num, const xint *den, float f)
 }
 
 /* exact tmin <= num/den <= tmax, den != 0 (the oracle's inequalities) */
-static int range_exact(const sc_xray *r, const xint *num, const xint *den)
+static int range_exact(const sc_ray *r, const xint *num, const xint *den)
 {
     int sd = xi_sign(den);
     if (!isfinite(r->tmin))
@@ -297,7 +297,7 @@ static int range_exact(const sc_xray *r, const xint *num, const xint *den)
     return 1;
 }
 
-int sc_x_vol_sign(const sc_xray *r, const float P[3], const float Q[3])
+int sc_exact_vol_sign(const sc_ray *r, const float P[3], const float Q[3])
 {
     float v[9] = { P[0], P[1], P[2], Q[0], Q[1], Q[2], 0, 0, 0 };
     xin in;
@@ -305,7 +305,7 @@ int sc_x_vol_sign(const sc_xray *r, const float P[3], const float Q[3])
     return vol_sign(&in, 0, 1);
 }
 
-int sc_x_hit_exact(const sc_xray *r, const float v[9])
+int sc_exact_hit_test(const sc_ray *r, const float v[9])
 {
     xin in;
     xin_init(&in, r, v);
@@ -319,7 +319,7 @@ int sc_x_hit_exact(const sc_xray *r, const float v[9])
     return range_exact(r, &num, &den);
 }
 
-int sc_x_cmp_t_exact(const sc_xray *r, const float a[9], const float b[9])
+int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9])
 {
     xin ia, ib;
     xin_init(&ia, r, a);
@@ -342,7 +342,7 @@ typedef struct dvol {
 /* Each volume term d_i p_j q_k passes through at most 7 roundings (two
  * translations, product, difference, product, two sums): the error is below
  * 7.001u times the permanent, computed within 7u itself, so 8u covers. */
-static void dvols(const sc_xray *r, const float *v, dvol *o)
+static void dvols(const sc_ray *r, const float *v, dvol *o)
 {
     const double d[3] = { r->dir[0], r->dir[1], r->dir[2] };
     for (int j = 0; j < 3; j++)
@@ -369,7 +369,7 @@ static void dvols(const sc_xray *r, const float *v, dvol *o)
  * sum |l_j| <= 1 + 2 rho):
  *   |t - t*| <= 2 rho (R + eta) + eta (1 + 2 rho) + 6u T (1 + 2 rho) + u |t|.
  * Returns 0 when den is within rounding of 0 (then nothing is set). */
-static int dt_bounds(const sc_xray *r, const dvol *o, double *lo, double *hi, double *tc, double *u, double *v)
+static int dt_bounds(const sc_ray *r, const dvol *o, double *lo, double *hi, double *tc, double *u, double *v)
 {
     const double d[3] = { r->dir[0], r->dir[1], r->dir[2] };
     double dd = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
@@ -414,7 +414,7 @@ static float f_up(double x)
 }
 
 /* a hit's exact t is in [tmin, tmax]: keep the rounded one there too */
-static void clamp_t(const sc_xray *r, sc_xhit *c)
+static void clamp_t(const sc_ray *r, sc_exact_hit *c)
 {
     if (!(c->t >= r->tmin)) c->t = r->tmin;
     if (!(c->t <= r->tmax)) c->t = r->tmax;
@@ -422,8 +422,9 @@ static void clamp_t(const sc_xray *r, sc_xhit *c)
 
 static void load_tri(const float *rows, unsigned W, unsigned i, float v[9])
 {
-    for (int j = 0; j < 9; j++)
-        v[j] = rows[(unsigned)j * W + i];
+    for (unsigned j = 0; j < 3; j++)
+        for (unsigned k = 0; k < 3; k++)
+            v[3 * j + k] = rows[sc_leaf_at(W, j, k, i)];
 }
 
 /* Double bounds for c (whose edges are settled: no two opposite exact
@@ -431,7 +432,7 @@ static void load_tri(const float *rows, unsigned W, unsigned i, float v[9])
  * u, v become the double ones (more accurate than the float filter's); with
  * report != 0 they are set even when the double den is ~0 (from the exact
  * values). */
-static void refine(const sc_xray *r, sc_xhit *c, const dvol *o, int report)
+static void refine(const sc_ray *r, sc_exact_hit *c, const dvol *o, int report)
 {
     double lo, hi, t, u, v;
     if (dt_bounds(r, o, &lo, &hi, &t, &u, &v)) {
@@ -456,7 +457,7 @@ static void refine(const sc_xray *r, sc_xhit *c, const dvol *o, int report)
     c->refined = 1;
 }
 
-static void refine_certified(const sc_xray *r, sc_xhit *c)
+static void refine_certified(const sc_ray *r, sc_exact_hit *c)
 {
     float tri[9];
     dvol o;
@@ -467,7 +468,7 @@ static void refine_certified(const sc_xray *r, sc_xhit *c)
 
 /* A lane the float filter left open: 1 iff the line crosses the closed
  * triangle (exact); then c holds bounds and the reported values. */
-static int settle(const sc_xray *r, sc_xhit *c)
+static int settle(const sc_ray *r, sc_exact_hit *c)
 {
     float tri[9];
     dvol o;
@@ -499,7 +500,7 @@ static int settle(const sc_xray *r, sc_xhit *c)
     return 1;
 }
 
-static int in_range(const sc_xray *r, sc_xhit *c)
+static int in_range(const sc_ray *r, sc_exact_hit *c)
 {
     for (;;) {
         if (c->hi < r->tmin || c->lo > r->tmax)
@@ -521,7 +522,7 @@ static int in_range(const sc_xray *r, sc_xhit *c)
 }
 
 /* 1 iff c's exact t is smaller than b's (ties keep b) */
-static int closer(const sc_xray *r, sc_xhit *c, sc_xhit *b)
+static int closer(const sc_ray *r, sc_exact_hit *c, sc_exact_hit *b)
 {
     for (;;) {
         if (c->hi < b->lo)
@@ -539,27 +540,27 @@ static int closer(const sc_xray *r, sc_xhit *c, sc_xhit *b)
         float ta[9], tb[9];
         load_tri(c->rows, c->W, c->lane, ta);
         load_tri(b->rows, b->W, b->lane, tb);
-        return sc_x_cmp_t_exact(r, ta, tb) < 0;
+        return sc_exact_cmp_t(r, ta, tb) < 0;
     }
 }
 
-unsigned sc_xresolve(const sc_xray *r, const float *rows, unsigned W, unsigned cand, const float *t,
+unsigned sc_exact_resolve(const sc_ray *r, const float *rows, unsigned W, unsigned cand, const float *t,
                      const float *te, const float *un, const float *vn, const float *den, int any,
-                     sc_xhit *best)
+                     sc_exact_hit *best)
 {
     if (!(r->tmin <= r->tmax) || isinf(r->tmin))
         return 0;
-    const uint32_t *ids = (const uint32_t *)(const void *)(rows + 9 * W);
+    const uint32_t *ids = sc_leaf_prims(rows, W);
     unsigned nh = 0;
     for (unsigned m = cand; m; m &= m - 1) {
         unsigned i = (unsigned)__builtin_ctz(m);
-        sc_xhit c;
+        sc_exact_hit c;
         c.have = 1;
         c.refined = 0;
         c.prim = ids[i];
         c.rows = rows, c.W = W, c.lane = i;
         if (te[i] >= 0) {
-            c.lo = t[i] - 2 * te[i];       /* as in sc_xfast */
+            c.lo = t[i] - 2 * te[i];       /* as in sc_exact_fast */
             c.hi = t[i] + 2 * te[i];
             c.t = t[i];
             c.u = un[i] * den[i];
@@ -582,7 +583,7 @@ unsigned sc_xresolve(const sc_xray *r, const float *rows, unsigned W, unsigned c
     return nh;
 }
 
-void sc_xhit_report(const sc_xray *r, sc_xhit *best)
+void sc_exact_report(const sc_ray *r, sc_exact_hit *best)
 {
     float tri[9];
     dvol o;

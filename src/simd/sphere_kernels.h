@@ -1,7 +1,9 @@
-/* The kernel table: one per ISA level, all kernels switch together.
- * Private to the library, the tests and the benchmark. */
-#ifndef SPHERECULL_SIMD_SC_KERNELS_H
-#define SPHERECULL_SIMD_SC_KERNELS_H
+/* The sphere kernels of one ISA level: batch spheres and reject masks.
+ * The ISA dispatch (src/isa/isa_dispatch.h) pairs each with the traversal
+ * kernels of the same level. Private to the library, the tests and the
+ * benchmarks. */
+#ifndef SPHERECULL_SIMD_SPHERE_KERNELS_H
+#define SPHERECULL_SIMD_SPHERE_KERNELS_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -39,8 +41,7 @@ enum { SC_KFLAG_NO_PRESCALE = 1u, SC_KFLAG_GENERAL = 2u, SC_KFLAG_NO_STREAM = 4u
  * this many triangles ahead. */
 #define SC_PREFETCH_AHEAD ((size_t)64)
 
-typedef struct sc_kernels {
-    sc_isa isa;
+typedef struct sc_sphere_kernels {
     /* Fills [0, sc_simd_padded(count)) of out; returns the number of
      * triangles with an out-of-range index. method/kind already checked. */
     size_t (*spheres_f)(const sc_tri_source_f *src, size_t count, int method, int kind,
@@ -52,16 +53,11 @@ typedef struct sc_kernels {
     uint32_t (*reject16)(const sc_ray *ray, const sc_sphere_block16 *b);
     uint32_t (*packet8)(const sc_ray_packet8 *rays, const float c[3], float r2);
     uint32_t (*packet16)(const sc_ray_packet16 *rays, const float c[3], float r2);
-} sc_kernels;
+} sc_sphere_kernels;
 
-extern const sc_kernels sc_kernels_scalar;
+extern const sc_sphere_kernels sc_sphere_kernels_scalar;
 #if defined(__x86_64__) || defined(__i386__)
-extern const sc_kernels sc_kernels_sse4, sc_kernels_avx2, sc_kernels_avx512;
+extern const sc_sphere_kernels sc_sphere_kernels_sse4, sc_sphere_kernels_avx2, sc_sphere_kernels_avx512;
 #endif
-
-/* The table for a level, or NULL if the build or CPU lacks it. */
-const sc_kernels *sc_kernels_for(sc_isa isa);
-/* The active table (initializes on first call). */
-const sc_kernels *sc_kernels_active(void);
 
 #endif

@@ -1,0 +1,31 @@
+/* Binned SAH build of a binary tree over primitive boxes and centres. */
+#ifndef SPHERECULL_BVH_BUILD_BINNED_SAH_H
+#define SPHERECULL_BVH_BUILD_BINNED_SAH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "box3.h"
+
+#define SC_SAH_MAX_BINS 64
+
+/* A binary node: inner (a, b = children) or leaf (a = first index into the
+ * id array, b = count). */
+typedef struct sc_bnode {
+    box3 box;
+    uint32_t a, b;
+    int leaf;
+} sc_bnode;
+
+typedef struct sc_sah_params {
+    int max_leaf;            /* most primitives per leaf */
+    int bins;                /* 4..SC_SAH_MAX_BINS */
+    float traversal_cost;    /* of a node visit, in leaf-block tests */
+} sc_sah_params;
+
+/* ids[0..n) (n >= 1) are permuted so that every leaf is a contiguous range;
+ * nodes needs room for 2n - 1. Deterministic. Returns the root's index. */
+uint32_t sc_build_binned_sah(const box3 *boxes, const float (*centres)[3], uint32_t *ids, size_t n,
+                             const sc_sah_params *p, sc_bnode *nodes, size_t *node_count);
+
+#endif

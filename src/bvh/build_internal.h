@@ -1,0 +1,36 @@
+/* What the steps of one BVH build share: the binary tree from the SAH
+ * step, the triangles for leaf encoding, and the counters of the two
+ * collapse passes (measure, then write). */
+#ifndef SPHERECULL_BVH_BUILD_INTERNAL_H
+#define SPHERECULL_BVH_BUILD_INTERNAL_H
+
+#include "build_binned_sah.h"
+#include "bvh_internal.h"
+
+typedef struct bvh_builder {
+    const sc_bvh_config *cfg;
+    const float *pos;
+    const uint32_t *idx;
+    const uint32_t *ids;     /* triangle ids, leaves are contiguous ranges */
+    const sc_bnode *bn;      /* the binary tree */
+    int dry;                 /* 1: only measure */
+    size_t node_used, leaf_used, sphere_used, leaves_emitted, leaves_spheres;
+    uint8_t *auto_use;       /* per binary node: auto decision (leaves only) */
+    sc_bvh *bvh;
+    int max_depth;
+    double sah;
+    float root_area;
+} bvh_builder;
+
+static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)
+{
+    return B->pos + 3 * (size_t)B->idx[3 * (size_t)tri + corner];
+}
+
+/* Writes (or, dry, measures) the 8-wide node over binary nodes kids[0..nk)
+ * and everything below it; returns its reference. */
+uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids, int nk, int depth);
+/* Writes (or measures) the leaf block of binary leaf bi; returns its reference. */
+uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi);
+
+#endif

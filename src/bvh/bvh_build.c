@@ -1,0 +1,240 @@
+/* The BVH build: checks the input, boxes the triangles, builds a binary
+ * tree by binned SAH over the boxes (build_binned_sah.c), collapses it into
+ * the 8-wide layout (collapse_bvh8.c) whose leaves leaf_triangles.c
+ * encodes; then the handle's lifecycle, its figures and the names of the
+ * config's enums. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "build_internal.h"
+
+void sc_bvh_config_default(sc_bvh_config *cfg)
+{
+    if (!cfg)
+        return;
+    /* Leaf 8 with a node visit costed at two leaf blocks (the SAH then
+     * fills leaves): faster shadow and primary rays and fewer bytes per
+     * triangle than leaf 4 / cost 1 (docs/compare.md). */
+    cfg->leaf_size = 8;
+    cfg->prefilter = SC_PREFILTER_OFF;
+    cfg->tri_test = SC_TRI_WATERTIGHT;
+    cfg->sah_bins = 32;
+    cfg->traversal_cost = 2.0f;
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void *alloc_aligned(size_t bytes)
+{
+    size_t n = (bytes + 63) / 64 * 64;
+    return aligned_alloc(64, n ? n : 64);
+}
+
+sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
+                       size_t triangle_count, const sc_bvh_config *cfg_in, sc_bvh **out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    sc_bvh_config cfg;
+    if (cfg_in)
+        cfg = *cfg_in;
+    else
+        sc_bvh_config_default(&cfg);
+    if (triangle_count && (!positions || !indices))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (cfg.leaf_size < 1 || cfg.leaf_size > SC_BVH_MAX_LEAF || (unsigned)cfg.prefilter >= SC_PREFILTER_MODE_COUNT ||
+        (unsigned)cfg.tri_test >= SC_TRI_TEST_COUNT ||
+        cfg.sah_bins < 4 || cfg.sah_bins > SC_SAH_MAX_BINS || !(cfg.traversal_cost >= 0) || !isfinite(cfg.traversal_cost))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (triangle_count > (size_t)INT32_MAX)
+        return SC_ERR_LIMIT;
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        if (indices[i] >= vertex_count)
+            return SC_ERR_INVALID_ARGUMENT;
+    sc_status st;
+
+    double t0 = now_seconds();
+    sc_bvh *bvh = calloc(1, sizeof *bvh);
+    bvh_builder B = { 0 };
+    B.cfg = &cfg;
+    B.pos = positions;
+    B.idx = indices;
+    size_t n = triangle_count;
+    box3 *pbox = malloc(sizeof(box3) * (n ? n : 1));
+    float (*cen)[3] = malloc(sizeof(float[3]) * (n ? n : 1));
+    uint32_t *ids = malloc(sizeof(uint32_t) * (n ? n : 1));
+    sc_bnode *bn = malloc(sizeof(sc_bnode) * (2 * n + 1));
+    B.auto_use = calloc(2 * n + 1, 1);
+    B.ids = ids;
+    B.bn = bn;
+    st = SC_ERR_OUT_OF_MEMORY;
+    if (!bvh || !pbox || !cen || !ids || !bn || !B.auto_use)
+        goto fail;
+    bvh->cfg = cfg;
+
+    size_t used = 0;
+    for (size_t t = 0; t < n; t++) {
+        box3 b;
+        box_empty(&b);
+        int finite = 1;
+        for (int corner = 0; corner < 3; corner++) {
+            const float *p = positions + 3 * (size_t)indices[3 * t + corner];
+            for (int k = 0; k < 3; k++) {
+                finite &= isfinite(p[k]) != 0;
+                b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
+                b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
+            }
+        }
+        if (!finite)
+            continue;
+        pbox[t] = b;
+        for (int k = 0; k < 3; k++)
+            cen[t][k] = 0.5f * b.lo[k] + 0.5f * b.hi[k];
+        ids[used++] = (uint32_t)t;
+    }
+    bvh->triangles = used;
+    bvh->skipped = n - used;
+
+    size_t root_nodes = 0;
+    if (used) {
+        const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost };
+        size_t bn_count;
+        uint32_t root = sc_build_binned_sah(pbox, (const float (*)[3])cen, ids, used, &sah, bn, &bn_count);
+        B.root_area = box_area(&B.bn[root].box);
+        if (!(B.root_area > 0))
+            B.root_area = 1;
+        for (int k = 0; k < 3; k++) {
+            bvh->root_lo[k] = B.bn[root].box.lo[k];
+            bvh->root_hi[k] = B.bn[root].box.hi[k];
+        }
+        /* Pass 1 measures, pass 2 writes with the same traversal order. */
+        B.bvh = bvh;
+        for (int pass = 0; pass < 2; pass++) {
+            B.dry = pass == 0;
+            B.node_used = B.leaf_used = B.sphere_used = B.leaves_emitted = B.leaves_spheres = 0;
+            B.sah = 0;
+            B.max_depth = 0;
+            const sc_bnode *r = &B.bn[root];
+            uint32_t kids[2] = { r->a, r->b };
+            if (r->leaf)
+                sc_collapse_bvh8(&B, &root, 1, 1);
+            else
+                sc_collapse_bvh8(&B, kids, 2, 1);
+            if (pass == 0) {
+                bvh->nodes = alloc_aligned(B.node_used * sizeof(sc_bvh_node8));
+                bvh->leaves = alloc_aligned(B.leaf_used);
+                if (!bvh->nodes || !bvh->leaves)
+                    goto fail;
+                memset(bvh->leaves, 0, (B.leaf_used + 63) / 64 * 64);
+            }
+        }
+        root_nodes = B.node_used;
+        bvh->has_root = 1;
+    }
+    bvh->node_count = root_nodes;
+    bvh->leaf_count = B.leaves_emitted;
+    bvh->leaves_with_spheres = B.leaves_spheres;
+    bvh->leaf_bytes = B.leaf_used;
+    bvh->sphere_bytes = B.sphere_used;
+    bvh->depth = B.max_depth;
+    bvh->sah_cost = B.sah;
+    bvh->build_seconds = now_seconds() - t0;
+    free(pbox);
+    free(cen);
+    free(ids);
+    free(bn);
+    free(B.auto_use);
+    *out = bvh;
+    return SC_OK;
+
+fail:
+    free(pbox);
+    free(cen);
+    free(ids);
+    free(bn);
+    free(B.auto_use);
+    sc_bvh_free(bvh);
+    return st;
+}
+
+void sc_bvh_free(sc_bvh *bvh)
+{
+    if (!bvh)
+        return;
+    free(bvh->nodes);
+    free(bvh->leaves);
+    free(bvh);
+}
+
+sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info)
+{
+    if (!bvh || !info)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->triangles = bvh->triangles;
+    info->skipped_triangles = bvh->skipped;
+    info->nodes = bvh->node_count;
+    info->leaves = bvh->leaf_count;
+    info->leaves_with_spheres = bvh->leaves_with_spheres;
+    info->node_bytes = bvh->node_count * sizeof(sc_bvh_node8);
+    info->leaf_bytes = bvh->leaf_bytes;
+    info->sphere_bytes = bvh->sphere_bytes;
+    info->total_bytes = info->node_bytes + info->leaf_bytes + sizeof *bvh;
+    info->depth = bvh->depth;
+    info->sah_cost = bvh->sah_cost;
+    info->build_seconds = bvh->build_seconds;
+    info->prefilter = bvh->cfg.prefilter;
+    info->leaf_size = bvh->cfg.leaf_size;
+    return SC_OK;
+}
+
+/* ---- names -------------------------------------------------------------- */
+
+static const char *const mode_names[SC_PREFILTER_MODE_COUNT] = { "off", "circum", "minimal", "auto" };
+static const char *const test_names[SC_TRI_TEST_COUNT] = { "watertight", "moller", "exact" };
+
+static sc_status lookup(const char *const *names, int count, const char *name, int *out)
+{
+    if (!name || !out)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < count; i++)
+        if (strcmp(names[i], name) == 0) {
+            *out = i;
+            return SC_OK;
+        }
+    return SC_ERR_INVALID_ARGUMENT;
+}
+
+const char *sc_prefilter_mode_name(sc_prefilter_mode m)
+{
+    return (unsigned)m < SC_PREFILTER_MODE_COUNT ? mode_names[m] : "unknown";
+}
+const char *sc_tri_test_name(sc_tri_test t)
+{
+    return (unsigned)t < SC_TRI_TEST_COUNT ? test_names[t] : "unknown";
+}
+sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out)
+{
+    int v;
+    sc_status s = lookup(mode_names, SC_PREFILTER_MODE_COUNT, name, &v);
+    if (s == SC_OK)
+        *out = (sc_prefilter_mode)v;
+    return s;
+}
+sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out)
+{
+    int v;
+    sc_status s = lookup(test_names, SC_TRI_TEST_COUNT, name, &v);
+    if (s == SC_OK)
+        *out = (sc_tri_test)v;
+    return s;
+}

@@ -1,0 +1,148 @@
+/* The per-ray set-up every traversal kernel shares, so that all ISAs see
+ * the same bits: validity, the clamped reciprocal direction and the slab
+ * padding folded into per-ray constants (node_bvh8_slab.h says why it is
+ * conservative), the watertight test's shear and the exact test's bound
+ * constants.
+ *
+ * The arithmetic of every kernel is fixed by the scalar specification
+ * (this file, node_bvh8_slab.h and the tri_*.h lane tests): no FMA where
+ * the code does not write one (-ffp-contract=off), operations in the same
+ * order, max(a,b) = a > b ? a : b like (v)maxps.
+ */
+#ifndef SPHERECULL_TRACE_RAY_SETUP_H
+#define SPHERECULL_TRACE_RAY_SETUP_H
+
+#include <math.h>
+#include <stdint.h>
+
+#include "spherecull/sc_prefilter.h"
+
+/* Directions below this magnitude are replaced by it (with their sign), as
+ * Embree does, so 1/d is finite and no slab distance is 0 * inf = NaN.
+ * That is not conservative for a ray (nearly) parallel to a slab that runs
+ * in or next to its plane: with d_y = 0 and o_y exactly on a box face the
+ * substituted ray leaves the slab at t = 0. Such rays ("parallel": some
+ * |d_k| < SC_MIN_RCP_INPUT) take the node test sc_slab_par below instead. */
+#define SC_MIN_RCP_INPUT 1e-18f
+/* |o| * 1/SC_MIN_RCP_INPUT must stay finite in float. */
+#define SC_MAX_ORIGIN 1e18f
+
+/* Everything the kernels call per ray or per node is forced inline: the
+ * kernels are compiled for AVX2/AVX-512 by target attribute, and a call to a
+ * function compiled for the baseline ISA costs a vzeroupper and the spill of
+ * every live ymm register (the ray's broadcasts). (docs/compare.md
+ * measured 8 % of shadow-ray time for one such call). */
+#define SC_TRACE_INLINE static inline __attribute__((always_inline))
+
+SC_TRACE_INLINE float sc_fmax(float a, float b) { return a > b ? a : b; }
+SC_TRACE_INLINE float sc_fmin(float a, float b) { return a < b ? a : b; }
+
+typedef struct sc_ray_pre {
+    float org[3], dir[3], tmin, tmax;
+    float rd[3];
+    float ord_near[3], ord_far[3]; /* b of the slab distances fl(p rd - b), padded outward */
+    float rdp[3];                  /* 1/d in IEEE (+-inf for d = +-0): parallel rays only */
+    int parallel;
+    int near_row[3], far_row[3];   /* rows of sc_bvh_node8.b */
+    int kx, ky, kz;                /* watertight: kz = axis of largest |d| */
+    float Sx, Sy, Sz;
+    float xK, xc0;                 /* exact test: edge bound E = xK (hP + hQ) + xc0 */
+} sc_ray_pre;
+
+static inline int sc_ray_valid(const sc_ray *r)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(fabsf(r->org[k]) < SC_MAX_ORIGIN) || !isfinite(r->dir[k]))
+            return 0;
+    if (r->dir[0] == 0 && r->dir[1] == 0 && r->dir[2] == 0)
+        return 0;
+    return r->tmin >= 0 && !isnan(r->tmax);
+}
+
+/* 1 iff the ray must take the parallel node test. */
+SC_TRACE_INLINE int sc_ray_parallel(const sc_ray *r)
+{
+    return !(fabsf(r->dir[0]) >= SC_MIN_RCP_INPUT && fabsf(r->dir[1]) >= SC_MIN_RCP_INPUT &&
+             fabsf(r->dir[2]) >= SC_MIN_RCP_INPUT);
+}
+
+/* The exact test's per-ray bound constants (derivation in tri_exact.c) from
+ * m_k = fl(max |root box - o| along axis k): S = fl(m_0 + m_1 + m_2) is at
+ * least (1 - 3u) times the largest L1 distance of a vertex from the origin,
+ * and K and c0 carry the factor (1 + 2^-10) of the derivation plus 0.07 %
+ * for the float roundings here. An overflow to +inf only sends every lane to
+ * the double/exact path. The SIMD set-up computes the same operations. */
+#define SC_EXACT_KS (6.11f * 0x1p-24f)
+#define SC_EXACT_CS (34.1f * 0x1p-48f)
+SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
+{
+    float S = (m[0] + m[1]) + m[2];
+    *xK = fmaf(S, SC_EXACT_KS, 0x1p-149f);
+    *xc0 = fmaf(S * S, SC_EXACT_CS, 0x1p-124f);
+}
+
+/* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other
+ * two, swapped for d[kz] < 0 to keep the winding (matters only for
+ * one-sided tests). */
+SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, int *kz_out)
+{
+    int kz = 0;
+    if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
+    if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    *kx_out = kx, *ky_out = ky, *kz_out = kz;
+}
+
+/* root_lo/root_hi: the BVH's root box (ignored when it has none). */
+SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const float root_lo[3],
+                                     const float root_hi[3])
+{
+    float mk[3];
+    p->parallel = sc_ray_parallel(r);
+    for (int k = 0; k < 3; k++) {
+        p->rdp[k] = p->parallel ? 1.0f / r->dir[k] : 0.0f;
+        p->org[k] = r->org[k];
+        p->dir[k] = r->dir[k];
+        float d = r->dir[k];
+        if (fabsf(d) < SC_MIN_RCP_INPUT)
+            d = copysignf(SC_MIN_RCP_INPUT, d);
+        p->rd[k] = 1.0f / d;
+        /* The pad, in float and mostly off the divide's path: with
+         * m >= M(1 - u) and 5 % slack for the roundings of these few
+         * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and
+         * then fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny
+         * terms cover underflow of the products and a subnormal rd; the
+         * 2^-148 in g keeps g >= |o| C + m C when it underflows, because
+         * |rd| (up to 1e18) multiplies g's rounding error (found by
+         * tests/test_slab.c on coordinates near 1e-40). */
+        float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
+        mk[k] = m;
+        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-148f));
+        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-147f, 0x1p-140f));
+        float ord = p->org[k] * p->rd[k];
+        p->ord_near[k] = ord + pad;
+        p->ord_far[k] = ord - pad;
+        int neg = signbit(p->rd[k]) != 0;
+        p->near_row[k] = 2 * k + neg;
+        p->far_row[k] = 2 * k + 1 - neg;
+    }
+    sc_exact_consts(mk, &p->xK, &p->xc0);
+    p->tmin = r->tmin;
+    p->tmax = r->tmax;
+    const float *d = r->dir;
+    int kx, ky, kz;
+    sc_shear_axes(d, &kx, &ky, &kz);
+    p->kx = kx, p->ky = ky, p->kz = kz;
+    p->Sx = d[kx] / d[kz];
+    p->Sy = d[ky] / d[kz];
+    /* 1/d[kz] is rd[kz] unless that was clamped: one divide fewer */
+    p->Sz = fabsf(d[kz]) >= SC_MIN_RCP_INPUT ? p->rd[kz] : 1.0f / d[kz];
+}
+
+#endif

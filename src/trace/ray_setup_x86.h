@@ -1,0 +1,115 @@
+/* The per-ray set-up in ymm registers: the broadcasts every node and leaf
+ * test of one ray reuses, computed as ray_setup.h computes them.
+ * Part of an x86 traversal translation unit (traverse_bvh8_x86.h), which
+ * defines SC_TARGET (the ISA's target attribute) and SC_X86_AVX512 first.
+ */
+#ifndef SPHERECULL_TRACE_RAY_SETUP_X86_H
+#define SPHERECULL_TRACE_RAY_SETUP_X86_H
+
+#include <immintrin.h>
+
+#include "bvh/bvh_internal.h"
+#include "ray_setup.h"
+
+#define SC_X86_INLINE static inline __attribute__((always_inline)) SC_TARGET
+
+typedef struct {
+    __m256 ordn[3], ordf[3], rd[3];
+    size_t near_off[3], far_off[3];      /* byte offsets of rows in a node */
+    __m256 okx, oky, okz, Sx, Sy, Sz, tmin;   /* broadcast once per ray, not per leaf */
+    __m256 xK, xc0;                           /* exact test's edge bound */
+    __m256 org[3], rdp[3];                    /* parallel rays' node test */
+    float org_s[3], dir_s[3];
+    int kx, ky, kz;
+} trace_ctx;
+
+SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
+{
+    for (int k = 0; k < 3; k++) {
+        c->ordn[k] = _mm256_set1_ps(p->ord_near[k]);
+        c->ordf[k] = _mm256_set1_ps(p->ord_far[k]);
+        c->rd[k] = _mm256_set1_ps(p->rd[k]);
+        c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
+        c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
+        c->org_s[k] = p->org[k];
+        c->org[k] = _mm256_set1_ps(p->org[k]);
+        c->rdp[k] = _mm256_set1_ps(p->rdp[k]);
+        c->dir_s[k] = p->dir[k];
+    }
+    c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
+    c->okx = _mm256_set1_ps(p->org[p->kx]);
+    c->oky = _mm256_set1_ps(p->org[p->ky]);
+    c->okz = _mm256_set1_ps(p->org[p->kz]);
+    c->Sx = _mm256_set1_ps(p->Sx);
+    c->Sy = _mm256_set1_ps(p->Sy);
+    c->Sz = _mm256_set1_ps(p->Sz);
+    c->tmin = _mm256_set1_ps(p->tmin);
+    c->xK = _mm256_set1_ps(p->xK);
+    c->xc0 = _mm256_set1_ps(p->xc0);
+}
+
+/* The set-up of a non-parallel ray (every kernel with a known octant):
+ * sc_ray_precompute's arithmetic with the three axes in one xmm register,
+ * one divide instead of three and no stores and reloads of the struct. The
+ * per-ray set-up is a visible part of a primary ray, which visits only
+ * about two nodes. Lane k computes exactly what the scalar code computes
+ * for axis k (maxps(a, b) = a > b ? a : b = sc_fmax), so every ISA still
+ * sees the same bits. Lane 3 holds tmin/tmax/root_hi[0] and is ignored. */
+SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bvh)
+{
+    const __m128 sgn = _mm_set1_ps(-0.0f);
+    const __m128 o = _mm_loadu_ps(r->org), d = _mm_loadu_ps(r->dir);
+    const __m128 rd = _mm_div_ps(_mm_set1_ps(1.0f), d);
+    const __m128 ord = _mm_mul_ps(o, rd);
+    const __m128 m = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_lo), o)),
+                                _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_hi), o)));
+    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
+                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-148f)));
+    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
+                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-147f), _mm_set1_ps(0x1p-140f)));
+    const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
+#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
+    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
+    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
+    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
+#undef BC
+    float mk[3] = { m[0], m[1], m[2] }, rdk[3] = { rd[0], rd[1], rd[2] };
+    float xK, xc0;
+    sc_exact_consts(mk, &xK, &xc0);
+    c->xK = _mm256_set1_ps(xK);
+    c->xc0 = _mm256_set1_ps(xc0);
+    /* the shear of the watertight test, as in sc_ray_precompute */
+    const float *dd = r->dir;
+    int kx, ky, kz;
+    sc_shear_axes(dd, &kx, &ky, &kz);
+    c->kx = kx, c->ky = ky, c->kz = kz;
+    c->okx = _mm256_set1_ps(r->org[kx]);
+    c->oky = _mm256_set1_ps(r->org[ky]);
+    c->okz = _mm256_set1_ps(r->org[kz]);
+    c->Sx = _mm256_set1_ps(dd[kx] / dd[kz]);
+    c->Sy = _mm256_set1_ps(dd[ky] / dd[kz]);
+    c->Sz = _mm256_set1_ps(rdk[kz]);
+    c->tmin = _mm256_set1_ps(r->tmin);
+    for (int k = 0; k < 3; k++)
+        c->org_s[k] = r->org[k], c->dir_s[k] = dd[k];
+}
+
+
+/* Lanes [h, h+8) of a block of width W. For W = 4 the upper lanes are
+ * undefined: every result is masked by `live` (< 16), and float garbage
+ * cannot trap (exceptions are masked), so the zero-extension is not paid. */
+SC_X86_INLINE __m256 leaf_row8(const float *row, unsigned W, unsigned h)
+{
+    if (W == 4)
+        return _mm256_castps128_ps256(_mm_load_ps(row));
+    return _mm256_load_ps(row + h);
+}
+
+SC_X86_INLINE unsigned
+mask8(__m256 m)
+{
+    return (unsigned)_mm256_movemask_ps(m);
+}
+
+
+#endif

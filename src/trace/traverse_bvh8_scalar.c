@@ -1,0 +1,125 @@
+/* The portable traversal: the specification every SIMD kernel must match
+ * bit for bit (same operations, same order, no FMA where none is written),
+ * and the kernels of CPUs without AVX2 (the scalar and SSE4.1 levels). */
+#include "bvh/bvh_internal.h"
+#include "node_bvh8_slab.h"
+#include "ray_setup.h"
+#include "tri_exact.h"
+#include "tri_moller.h"
+#include "tri_watertight.h"
+
+#define SC_TARGET
+
+typedef struct trace_ctx { sc_ray_pre pre; } trace_ctx;
+
+static inline void ctx_init(trace_ctx *c, const sc_ray_pre *p) { c->pre = *p; }
+/* Non-parallel rays: here the same set-up as any other. */
+static inline void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bvh)
+{
+    sc_ray_precompute(r, &c->pre, bvh->root_lo, bvh->root_hi);
+}
+
+static inline unsigned node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax,
+                                 float *dist, const int OCT, const int WANT_DIST)
+{
+    (void)OCT, (void)WANT_DIST;
+    return sc_slab(&c->pre, node, tmin, tmax, dist);
+}
+
+static inline unsigned node_test_par(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax,
+                                     float *dist)
+{
+    return sc_slab_par(&c->pre, node, tmin, tmax, dist);
+}
+
+/* The scalar specification of the reject kernels (src/sphere/prefilter.c),
+ * lane by lane; block = cx[W], cy[W], cz[W], r2[W]. */
+static inline uint32_t sphere_reject(const sc_ray *ray, const float *blk, unsigned W)
+{
+    uint32_t mask = 0;
+    for (unsigned i = 0; i < W; i++) {
+        const float c[3] = { blk[i], blk[W + i], blk[2 * W + i] };
+        mask |= (uint32_t)sc_ray_sphere_reject(ray, c, blk[3 * W + i]) << i;
+    }
+    return mask;
+}
+
+static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live,
+                                 float tmin, float tmax, int test, float *t, float *te, float *un,
+                                 float *vn, float *den)
+{
+    const sc_ray_pre *p = &c->pre;
+    unsigned hm = 0;
+    for (unsigned m = live; m; m &= m - 1) {
+        unsigned i = (unsigned)__builtin_ctz(m);
+        int h = test == SC_TRI_MOLLER ? sc_tri_moller(p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i])
+                : test == SC_TRI_EXACT
+                    ? sc_tri_exact_filter(p, rows, W, i, tmin, tmax, &t[i], &te[i], &un[i], &vn[i], &den[i])
+                    : sc_tri_watertight(p, rows, W, i, tmin, tmax, &t[i], &un[i], &vn[i], &den[i]);
+        hm |= (unsigned)h << i;
+    }
+    return hm;
+}
+
+#include "traverse_bvh8_single.h"
+
+const sc_trace_kernels sc_trace_kernels_scalar[SC_TRI_TEST_COUNT] = SC_TRACE_KERNEL_TABLE;
+
+/* Every leaf, no box tests, no prefilter: a same-arithmetic oracle for the
+ * traversal (it can only differ on exact ties in t). */
+sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit)
+{
+    if (!bvh || !ray || !hit || !sc_ray_valid(ray))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_ray_pre p;
+    sc_ray_precompute(ray, &p, bvh->root_lo, bvh->root_hi);
+    trace_ctx c;
+    ctx_init(&c, &p);
+    float tmax = ray->tmax;
+    hit->prim = SC_HITREC_MISS;
+    hit->t = ray->tmax;
+    hit->u = hit->v = 0;
+    if (!bvh->has_root)
+        return SC_OK;
+    const int test = bvh->cfg.tri_test;
+    sc_exact_hit xb;
+    xb.have = 0;
+    for (size_t ni = 0; ni < bvh->node_count; ni++) {
+        const sc_bvh_node8 *node = &bvh->nodes[ni];
+        for (int s = 0; s < SC_BVH_N; s++) {
+            uint64_t ref = node->child[s];
+            if (!sc_ref_is_leaf(ref))
+                continue;
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *rows = sc_leaf_rows(sc_leaf_block(bvh->leaves, ref), W, sc_ref_has_spheres(ref));
+            float t[16], te[16], un[16], vn[16], den[16];
+            unsigned hm = leaf_test(&c, rows, W, (1u << n) - 1, ray->tmin, tmax, test, t, te, un, vn, den);
+            if (!hm)
+                continue;
+            if (test == SC_TRI_EXACT) {
+                sc_exact_resolve(ray, rows, W, hm, t, te, un, vn, den, 0, &xb);
+                if (xb.have) {
+                    tmax = xb.hi;
+                    sc_exact_finish(ray, &xb);
+                    hit->prim = xb.prim;
+                    hit->t = xb.t;
+                    hit->u = xb.u;
+                    hit->v = xb.v;
+                }
+                continue;
+            }
+            int bi = __builtin_ctz(hm);
+            for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
+                int i = __builtin_ctz(rest);
+                if (t[i] < t[bi])
+                    bi = i;
+            }
+            tmax = t[bi];
+            hit->t = t[bi];
+            hit->prim = sc_leaf_prims(rows, W)[bi];
+            hit->u = un[bi] / den[bi];
+            hit->v = vn[bi] / den[bi];
+        }
+    }
+    return SC_OK;
+}

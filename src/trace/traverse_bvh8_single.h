@@ -1,0 +1,284 @@
+/* The single-ray traversal of the 8-wide BVH, one body for every ISA. The
+ * translation unit that includes it (traverse_bvh8_scalar.c,
+ * traverse_bvh8_x86.h) first defines, for its ISA:
+ *   SC_TARGET        the function attribute (target ISA; empty for scalar)
+ *   trace_ctx        per-ray state, filled by ctx_init (any ray) or
+ *                    ctx_init_fast (a non-parallel ray)
+ *   node_test        8 child boxes -> hit mask + entry distances;
+ *                    node_test_par the same for parallel rays
+ *   sphere_reject    one ray against a leaf's sphere block (its own ISA's
+ *                    kernel, inlined: no dispatch inside the traversal)
+ *   leaf_test        one leaf block -> hit mask + t, barycentric numerators,
+ *                    denominators; for SC_TRI_EXACT the mask of lanes left
+ *                    to sc_exact_resolve and per lane the float t's error bound
+ * and gets the kernels closest_<test>, any_<test>, closest_stats_<test> and
+ * any_stats_<test> for every sc_tri_test, gathered by SC_TRACE_KERNEL_TABLE.
+ *
+ * One body serves closest/any and with/without statistics: the flags are
+ * compile-time constants of always-inlined code, so the statistics-free
+ * kernels contain no counting at all.
+ */
+#include "bvh/bvh_internal.h"
+#include "trace_kernels.h"
+#include "traverse_stack.h"
+#include "tri_exact.h"
+
+#define SC_TRAVERSE_INLINE static inline __attribute__((always_inline)) SC_TARGET
+
+SC_TRAVERSE_INLINE int
+traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
+                const int ANY, const int STATS, const int TEST, const int OCT)
+{
+    /* exact mode: tmax is the culling bound, a float >= the exact t of the
+     * closest hit so far (xb), which sc_exact_resolve chooses exactly */
+    sc_exact_hit xb;
+    xb.have = 0;
+    trace_ctx ctx;
+    int parallel = 0;
+    if (OCT >= 0) {
+        ctx_init_fast(&ctx, ray, bvh);
+    } else {
+        sc_ray_pre p;
+        sc_ray_precompute(ray, &p, bvh->root_lo, bvh->root_hi);
+        ctx_init(&ctx, &p);
+        parallel = p.parallel;
+    }
+    const float tmin = ray->tmin;
+    float tmax = ray->tmax;
+    sc_ray cur = *ray;
+    uint32_t best_prim = SC_HITREC_MISS;
+    float best_u = 0, best_v = 0;
+    sc_stack_entry stack[SC_TRACE_STACK];
+    int sp = 0;
+    if (STATS)
+        st->rays++;
+    if (!bvh->has_root)
+        goto done;
+
+    uint64_t ref = 0;                  /* the root, nodes[0] */
+    for (;;) {
+        while (!sc_ref_is_leaf(ref)) {
+            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+            if (STATS)
+                st->nodes++;
+            float dist[SC_BVH_N] __attribute__((aligned(32)));
+            /* OCT = -2: a parallel ray (ray_setup.h); the counting
+             * kernels (OCT = -1) decide per ray */
+            unsigned m = OCT == -2 || (OCT == -1 && parallel)
+                             ? node_test_par(&ctx, node, tmin, tmax, dist)
+                             : node_test(&ctx, node, tmin, tmax, dist, OCT, !ANY);
+            if (!m)
+                goto pop;
+            if ((m & (m - 1)) == 0) {
+                ref = node->child[__builtin_ctz(m)];
+                continue;
+            }
+            if (ANY) {
+                /* Any hit ends the search, so order buys nothing (as in
+                 * Embree's occlusion traversal): push all but the first. */
+                ref = node->child[__builtin_ctz(m)];
+                /* Pushed from the last slot down, so they pop in slot order
+                 * (the builder puts larger boxes first). No prefetch: most
+                 * pushed subtrees of a blocked shadow ray are never popped. */
+                for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
+                    stack[sp++].ref = node->child[31 - __builtin_clz(m)];
+                continue;
+            }
+            ref = sc_order_children(node, m, dist, stack, &sp);
+        }
+        {
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *block = sc_leaf_block(bvh->leaves, ref);
+            const float *rows = sc_leaf_rows(block, W, sc_ref_has_spheres(ref));
+            unsigned live = (1u << n) - 1;
+            if (STATS)
+                st->leaves++;
+            if (sc_ref_has_spheres(ref)) {
+                cur.tmax = tmax;
+                uint32_t rej = sphere_reject(&cur, block, W) & live;
+                if (STATS) {
+                    st->sphere_tests += n;
+                    st->sphere_rejects += (uint64_t)__builtin_popcount(rej);
+                }
+                live &= ~rej;
+            }
+            if (live) {
+                float t[16] __attribute__((aligned(64)));
+                float un[16] __attribute__((aligned(64)));
+                float vn[16] __attribute__((aligned(64)));
+                float den[16] __attribute__((aligned(64)));
+                float te[16] __attribute__((aligned(64)));
+                if (STATS)
+                    st->tri_tests += (uint64_t)__builtin_popcount(live);
+                unsigned hm = leaf_test(&ctx, rows, W, live, tmin, tmax, TEST, t, te, un, vn, den);
+                if (TEST == SC_TRI_EXACT) {
+                    for (; hm; hm &= hm - 1) {
+                        unsigned i = (unsigned)__builtin_ctz(hm);
+                        int take;
+                        float lo, hi;
+                        if (te[i] >= 0 && sc_exact_fast(ray, t[i], te[i], &xb, &take, &lo, &hi)) {
+                            if (STATS)
+                                st->tri_hits++;
+                            if (ANY)
+                                return 1;
+                            if (take) {
+                                xb.have = 1, xb.refined = 0;
+                                xb.prim = sc_leaf_prims(rows, W)[i];
+                                xb.rows = rows, xb.W = W, xb.lane = i;
+                                xb.lo = lo, xb.hi = hi;
+                                xb.t = t[i], xb.u = un[i] * den[i], xb.v = vn[i] * den[i];
+                                tmax = hi;
+                            }
+                            continue;
+                        }
+                        unsigned nh = sc_exact_resolve(ray, rows, W, 1u << i, t, te, un, vn, den, ANY, &xb);
+                        if (STATS)
+                            st->tri_hits += nh;
+                        if (ANY && nh)
+                            return 1;
+                        if (!ANY && xb.have)
+                            tmax = xb.hi;
+                    }
+                } else if (hm) {
+                    if (STATS)
+                        st->tri_hits += (uint64_t)__builtin_popcount(hm);
+                    if (ANY)
+                        return 1;
+                    int bi = __builtin_ctz(hm);
+                    for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
+                        int i = __builtin_ctz(rest);
+                        if (t[i] < t[bi])
+                            bi = i;
+                    }
+                    tmax = t[bi];
+                    best_prim = sc_leaf_prims(rows, W)[bi];
+                    best_u = un[bi] / den[bi];
+                    best_v = vn[bi] / den[bi];
+                }
+            }
+        }
+    pop:
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+        } while (!ANY && stack[sp].dist > tmax);
+        ref = stack[sp].ref;
+    }
+done:
+    if (TEST == SC_TRI_EXACT && !ANY) {
+        sc_exact_finish(ray, &xb);
+        hit->prim = xb.have ? xb.prim : SC_HITREC_MISS;
+        hit->t = xb.have ? xb.t : ray->tmax;
+        hit->u = xb.have ? xb.u : 0;
+        hit->v = xb.have ? xb.v : 0;
+        return 0;
+    }
+    if (!ANY) {
+        hit->prim = best_prim;
+        hit->t = best_prim == SC_HITREC_MISS ? ray->tmax : tmax;
+        hit->u = best_u;
+        hit->v = best_v;
+    }
+    return 0;
+}
+
+/* The statistics-free kernels are specialised per ray octant (the signs of
+ * the direction pick the near and far box planes at compile time; -2 is a
+ * parallel ray); the counting kernels keep one generic body (-1). */
+SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
+{
+    if (sc_ray_parallel(r))
+        return -2;
+    return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
+}
+
+SC_TRAVERSE_INLINE void closest_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int TEST)
+{
+    switch (ray_octant(r)) {
+    case -2: traverse_single(b, r, h, NULL, 0, 0, TEST, -2); break;
+    case 0: traverse_single(b, r, h, NULL, 0, 0, TEST, 0); break;
+    case 1: traverse_single(b, r, h, NULL, 0, 0, TEST, 1); break;
+    case 2: traverse_single(b, r, h, NULL, 0, 0, TEST, 2); break;
+    case 3: traverse_single(b, r, h, NULL, 0, 0, TEST, 3); break;
+    case 4: traverse_single(b, r, h, NULL, 0, 0, TEST, 4); break;
+    case 5: traverse_single(b, r, h, NULL, 0, 0, TEST, 5); break;
+    case 6: traverse_single(b, r, h, NULL, 0, 0, TEST, 6); break;
+    default: traverse_single(b, r, h, NULL, 0, 0, TEST, 7); break;
+    }
+}
+
+SC_TRAVERSE_INLINE int any_by_octant(const sc_bvh *b, const sc_ray *r, const int TEST)
+{
+    switch (ray_octant(r)) {
+    case -2: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, -2);
+    case 0: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 0);
+    case 1: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 1);
+    case 2: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 2);
+    case 3: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 3);
+    case 4: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 4);
+    case 5: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 5);
+    case 6: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 6);
+    default: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 7);
+    }
+}
+
+static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    closest_by_octant(b, r, h, SC_TRI_WATERTIGHT);
+}
+static SC_TARGET int any_watertight(const sc_bvh *b, const sc_ray *r)
+{
+    return any_by_octant(b, r, SC_TRI_WATERTIGHT);
+}
+static SC_TARGET void closest_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
+{
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_WATERTIGHT, -1);
+}
+static SC_TARGET int any_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
+{
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_WATERTIGHT, -1);
+}
+
+static SC_TARGET void closest_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    closest_by_octant(b, r, h, SC_TRI_MOLLER);
+}
+static SC_TARGET int any_moller(const sc_bvh *b, const sc_ray *r)
+{
+    return any_by_octant(b, r, SC_TRI_MOLLER);
+}
+static SC_TARGET void closest_stats_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
+{
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_MOLLER, -1);
+}
+static SC_TARGET int any_stats_moller(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
+{
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_MOLLER, -1);
+}
+
+static SC_TARGET void closest_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    closest_by_octant(b, r, h, SC_TRI_EXACT);
+}
+static SC_TARGET int any_exact(const sc_bvh *b, const sc_ray *r)
+{
+    return any_by_octant(b, r, SC_TRI_EXACT);
+}
+static SC_TARGET void closest_stats_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
+{
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_EXACT, -1);
+}
+static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
+{
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_EXACT, -1);
+}
+
+/* Initializer of a sc_trace_kernels[SC_TRI_TEST_COUNT] table. */
+#define SC_TRACE_KERNEL_TABLE                                                                         \
+    {                                                                                                 \
+        [SC_TRI_WATERTIGHT] = { closest_watertight, any_watertight, closest_stats_watertight,         \
+                                any_stats_watertight },                                               \
+        [SC_TRI_MOLLER] = { closest_moller, any_moller, closest_stats_moller, any_stats_moller },     \
+        [SC_TRI_EXACT] = { closest_exact, any_exact, closest_stats_exact, any_stats_exact },          \
+    }

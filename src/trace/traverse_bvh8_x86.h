@@ -1,0 +1,87 @@
+/* The x86 traversal: 8-wide box tests in ymm registers; leaf blocks of 4
+ * and 8 lanes in one ymm pass, 16 lanes in two (the tests are written for
+ * 8 lanes); the sphere reject kernel of the same ISA inlined. Included by
+ * traverse_bvh8_avx2.c and traverse_bvh8_avx512.c, which define
+ *   SC_TARGET       the ISA's target attribute
+ *   SC_X86_AVX512   1 for mask-register compares (AVX-512VL), else 0
+ * The arithmetic is the scalar specification's (traverse_bvh8_scalar.c),
+ * operation for operation. */
+#include <float.h>
+#include <math.h>
+
+#include "node_bvh8_slab_x86.h"
+#include "ray_setup_x86.h"
+#include "tri_exact_x86.h"
+#include "tri_moller_x86.h"
+#include "tri_watertight_x86.h"
+
+/* The reject kernels of src/simd, the same template the sphere kernel table
+ * is built from, compiled here so that they inline into the traversal. */
+#define SC_VEC_F32X4
+#define SC_VEC_F32X8
+#if SC_X86_AVX512
+#define SC_VEC_F32X16
+#endif
+#include "simd/simd_vec.h"
+#define ATTR SC_TARGET
+#define RQUAL SC_X86_INLINE
+#define VP f32x4
+#define W 4
+#define RFUNC sphere_reject4
+#include "simd/reject_template.h"
+#undef VP
+#undef W
+#undef RFUNC
+#define VP f32x8
+#define W 8
+#define RFUNC sphere_reject8
+#include "simd/reject_template.h"
+#undef VP
+#undef W
+#undef RFUNC
+#if SC_X86_AVX512
+#define VP f32x16
+#else
+#define VP f32x8
+#endif
+#define W 16
+#define RFUNC sphere_reject16
+#include "simd/reject_template.h"
+#undef VP
+#undef W
+#undef RFUNC
+#undef RQUAL
+#undef ATTR
+
+SC_X86_INLINE uint32_t sphere_reject(const sc_ray *ray, const float *blk, unsigned W)
+{
+    if (W == 4)
+        return sphere_reject4(ray, (const sc_sphere_block4 *)(const void *)blk);
+    if (W == 8)
+        return sphere_reject8(ray, (const sc_sphere_block8 *)(const void *)blk);
+    return sphere_reject16(ray, (const sc_sphere_block16 *)(const void *)blk);
+}
+
+SC_X86_INLINE unsigned
+leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, float tmin, float tmax,
+               int test, float *t, float *te, float *un, float *vn, float *den)
+{
+    unsigned hm;
+    if (test == SC_TRI_EXACT) {
+        hm = tri_exact8(c, rows, W, 0, live & 0xff, tmin, tmax, t, te, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= tri_exact8(c, rows, W, 8, live >> 8, tmin, tmax, t, te, un, vn, den) << 8;
+    } else if (test == SC_TRI_MOLLER) {
+        hm = tri_moller8(c, rows, W, 0, live & 0xff, tmin, tmax, t, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= tri_moller8(c, rows, W, 8, live >> 8, tmin, tmax, t, un, vn, den) << 8;
+    } else {
+        hm = tri_watertight8(c, rows, W, 0, live & 0xff, tmin, tmax, t, un, vn, den);
+        if (W == 16 && (live >> 8))
+            hm |= tri_watertight8(c, rows, W, 8, live >> 8, tmin, tmax, t, un, vn, den) << 8;
+    }
+    return hm;
+}
+
+
+#include "traverse_bvh8_single.h"
