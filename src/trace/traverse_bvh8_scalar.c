@@ -6,6 +6,7 @@
 #include "ray_setup.h"
 #include "tri_exact.h"
 #include "tri_moller.h"
+#include "traverse_stack.h"
 #include "tri_watertight.h"
 
 #define SC_TARGET
@@ -108,12 +109,7 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
                 }
                 continue;
             }
-            int bi = __builtin_ctz(hm);
-            for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
-                int i = __builtin_ctz(rest);
-                if (t[i] < t[bi])
-                    bi = i;
-            }
+            const unsigned bi = sc_nearest_lane(hm, t);
             tmax = t[bi];
             hit->t = t[bi];
             hit->prim = sc_leaf_prims(rows, W)[bi];

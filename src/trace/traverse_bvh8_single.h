@@ -144,12 +144,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
                         st->tri_hits += (uint64_t)__builtin_popcount(hm);
                     if (ANY)
                         return 1;
-                    int bi = __builtin_ctz(hm);
-                    for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
-                        int i = __builtin_ctz(rest);
-                        if (t[i] < t[bi])
-                            bi = i;
-                    }
+                    const unsigned bi = sc_nearest_lane(hm, t);
                     tmax = t[bi];
                     best_prim = sc_leaf_prims(rows, W)[bi];
                     best_u = un[bi] / den[bi];
@@ -193,43 +188,29 @@ SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
     return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
 }
 
-SC_TRAVERSE_INLINE void closest_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int TEST)
+SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
+                                          const int TEST)
 {
     switch (ray_octant(r)) {
-    case -2: traverse_single(b, r, h, NULL, 0, 0, TEST, -2); break;
-    case 0: traverse_single(b, r, h, NULL, 0, 0, TEST, 0); break;
-    case 1: traverse_single(b, r, h, NULL, 0, 0, TEST, 1); break;
-    case 2: traverse_single(b, r, h, NULL, 0, 0, TEST, 2); break;
-    case 3: traverse_single(b, r, h, NULL, 0, 0, TEST, 3); break;
-    case 4: traverse_single(b, r, h, NULL, 0, 0, TEST, 4); break;
-    case 5: traverse_single(b, r, h, NULL, 0, 0, TEST, 5); break;
-    case 6: traverse_single(b, r, h, NULL, 0, 0, TEST, 6); break;
-    default: traverse_single(b, r, h, NULL, 0, 0, TEST, 7); break;
-    }
-}
-
-SC_TRAVERSE_INLINE int any_by_octant(const sc_bvh *b, const sc_ray *r, const int TEST)
-{
-    switch (ray_octant(r)) {
-    case -2: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, -2);
-    case 0: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 0);
-    case 1: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 1);
-    case 2: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 2);
-    case 3: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 3);
-    case 4: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 4);
-    case 5: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 5);
-    case 6: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 6);
-    default: return traverse_single(b, r, NULL, NULL, 1, 0, TEST, 7);
+    case -2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2);
+    case 0: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 0);
+    case 1: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 1);
+    case 2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 2);
+    case 3: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 3);
+    case 4: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 4);
+    case 5: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 5);
+    case 6: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 6);
+    default: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 7);
     }
 }
 
 static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    closest_by_octant(b, r, h, SC_TRI_WATERTIGHT);
+    traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT);
 }
 static SC_TARGET int any_watertight(const sc_bvh *b, const sc_ray *r)
 {
-    return any_by_octant(b, r, SC_TRI_WATERTIGHT);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT);
 }
 static SC_TARGET void closest_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
@@ -242,11 +223,11 @@ static SC_TARGET int any_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_t
 
 static SC_TARGET void closest_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    closest_by_octant(b, r, h, SC_TRI_MOLLER);
+    traverse_by_octant(b, r, h, 0, SC_TRI_MOLLER);
 }
 static SC_TARGET int any_moller(const sc_bvh *b, const sc_ray *r)
 {
-    return any_by_octant(b, r, SC_TRI_MOLLER);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_MOLLER);
 }
 static SC_TARGET void closest_stats_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
@@ -259,11 +240,11 @@ static SC_TARGET int any_stats_moller(const sc_bvh *b, const sc_ray *r, sc_trace
 
 static SC_TARGET void closest_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    closest_by_octant(b, r, h, SC_TRI_EXACT);
+    traverse_by_octant(b, r, h, 0, SC_TRI_EXACT);
 }
 static SC_TARGET int any_exact(const sc_bvh *b, const sc_ray *r)
 {
-    return any_by_octant(b, r, SC_TRI_EXACT);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_EXACT);
 }
 static SC_TARGET void closest_stats_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {

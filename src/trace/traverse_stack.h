@@ -59,4 +59,17 @@ SC_TRACE_INLINE uint64_t sc_order_children(const sc_bvh_node8 *node, unsigned ma
     return ref[0];
 }
 
+/* The lane of the smallest t among the hit lanes hm (hm != 0); of equal t
+ * the lowest lane. */
+SC_TRACE_INLINE unsigned sc_nearest_lane(unsigned hm, const float *t)
+{
+    unsigned bi = (unsigned)__builtin_ctz(hm);
+    for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
+        unsigned i = (unsigned)__builtin_ctz(rest);
+        if (t[i] < t[bi])
+            bi = i;
+    }
+    return bi;
+}
+
 #endif
