@@ -67,7 +67,7 @@ const sc_kernels *sc_kernels_for(sc_isa isa)
     }
 }
 
-static const sc_kernels *active;      /* accessed atomically */
+const sc_kernels *sc_kernels_active_ptr;   /* accessed atomically */
 static int init_status = -1;          /* accessed atomically; -1 = not yet */
 
 static const sc_kernels *best(void)
@@ -106,19 +106,16 @@ sc_status sc_simd_init(void)
     sc_status s;
     const sc_kernels *k = choose(&s);
     const sc_kernels *expected = NULL;
-    __atomic_compare_exchange_n(&active, &expected, k, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE);
+    __atomic_compare_exchange_n(&sc_kernels_active_ptr, &expected, k, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE);
     int unset = -1;
     __atomic_compare_exchange_n(&init_status, &unset, (int)s, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE);
     return (sc_status)__atomic_load_n(&init_status, __ATOMIC_ACQUIRE);
 }
 
-const sc_kernels *sc_kernels_active(void)
+const sc_kernels *sc_kernels_first_use(void)
 {
-    const sc_kernels *k = __atomic_load_n(&active, __ATOMIC_ACQUIRE);
-    if (k)
-        return k;
     sc_simd_init();
-    return __atomic_load_n(&active, __ATOMIC_ACQUIRE);
+    return __atomic_load_n(&sc_kernels_active_ptr, __ATOMIC_ACQUIRE);
 }
 
 sc_isa sc_isa_active(void)
@@ -132,7 +129,7 @@ sc_status sc_isa_force(sc_isa isa)
     if (!k)
         return (unsigned)isa < SC_ISA_COUNT ? SC_ERR_UNSUPPORTED : SC_ERR_INVALID_ARGUMENT;
     sc_simd_init();
-    __atomic_store_n(&active, k, __ATOMIC_RELEASE);
+    __atomic_store_n(&sc_kernels_active_ptr, k, __ATOMIC_RELEASE);
     return SC_OK;
 }
 
