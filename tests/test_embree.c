@@ -13,7 +13,7 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_embree.h"
 
 static sc_embree *make(const sc_mesh_view *m, sc_embree_mode mode, int cluster, sc_embree_quality q)

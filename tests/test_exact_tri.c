@@ -31,7 +31,7 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "sc_ref_ray.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
@@ -527,7 +527,7 @@ static void test_open_meshes(void **state)
     mesh m;
     sc_proc_mesh pm;
     const double off[3] = { 0.5, -0.25, 1.5 };
-    assert_int_equal(sc_proc_grid(40, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(40, &pm), SC_OK);
     from_proc(&m, &pm, off, 1.0);
     run_mesh("grid", &m, 3000, 7, 0);
     mesh_free(&m);

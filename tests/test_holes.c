@@ -35,7 +35,7 @@
 #include "common/sc_rng.h"
 #include "compare/crossing.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
 #include "spherecull/sc_trace.h"

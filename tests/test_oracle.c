@@ -14,7 +14,7 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "sc_ref_ray.h"
 
 /* Two triangles sharing the diagonal of the unit square at z = 0, a fan of

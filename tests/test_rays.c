@@ -11,7 +11,7 @@
 
 #include <mpfr.h>
 
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_rays.h"
 
 static int same_set(const sc_rayset *a, const sc_rayset *b)
@@ -145,7 +145,7 @@ static void test_shadow_and_diffuse(void **state)
 {
     (void)state;
     sc_proc_mesh pm;
-    assert_int_equal(sc_proc_grid(8, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(8, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
     /* two hand-made primary rays: one hits triangle 0, one misses */
     sc_rayset from;
@@ -191,7 +191,7 @@ static void test_closed(void **state)
     assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
     assert_int_equal(closed, 0);
     sc_proc_free(&pm);
-    assert_int_equal(sc_proc_grid(4, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(4, &pm), SC_OK);
     m = sc_proc_view(&pm);
     assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
     assert_int_equal(closed, 0);
