@@ -194,26 +194,26 @@ static int hit_frame(const sc_mesh_view *mesh, const sc_ray *r, const sc_hitrec 
     return 1;
 }
 
-static sc_status check_from(const sc_checked_mesh *mesh, const sc_rayset *from,
-                            const sc_hitrec *hits)
+/* The start of a set made from the hits of another: *out cleared, the
+ * arguments checked (args_ok: the caller's own), room for one ray per hit. */
+static sc_status start_from_hits(const sc_checked_mesh *mesh, const sc_rayset *from,
+                                 const sc_hitrec *hits, int args_ok, sc_rayset_kind kind,
+                                 sc_rayset *out)
 {
-    if (!mesh || !from || !hits || (!from->rays && from->count))
+    if (!out)
         return SC_ERR_INVALID_ARGUMENT;
-    return SC_OK;
+    memset(out, 0, sizeof *out);
+    if (!mesh || !from || !hits || (!from->rays && from->count) || !args_ok)
+        return SC_ERR_INVALID_ARGUMENT;
+    return rayset_alloc(out, kind, from->count);
 }
 
 sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
                            const sc_hitrec *hits, const float light[3], sc_rayset *out)
 {
-    if (!out)
-        return SC_ERR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
-    sc_status st = check_from(mesh, from, hits);
+    int light_ok = light && isfinite(light[0]) && isfinite(light[1]) && isfinite(light[2]);
+    sc_status st = start_from_hits(mesh, from, hits, light_ok, SC_RAYS_SHADOW, out);
     if (st != SC_OK)
-        return st;
-    if (!light || !isfinite(light[0]) || !isfinite(light[1]) || !isfinite(light[2]))
-        return SC_ERR_INVALID_ARGUMENT;
-    if ((st = rayset_alloc(out, SC_RAYS_SHADOW, from->count)) != SC_OK)
         return st;
     double off = SC_RAYS_OFFSET * mesh_diag(mesh);
     size_t n = 0;
@@ -234,13 +234,8 @@ sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
 sc_status sc_rayset_diffuse(const sc_checked_mesh *mesh, const sc_rayset *from,
                             const sc_hitrec *hits, uint64_t seed, sc_rayset *out)
 {
-    if (!out)
-        return SC_ERR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
-    sc_status st = check_from(mesh, from, hits);
+    sc_status st = start_from_hits(mesh, from, hits, 1, SC_RAYS_DIFFUSE, out);
     if (st != SC_OK)
-        return st;
-    if ((st = rayset_alloc(out, SC_RAYS_DIFFUSE, from->count)) != SC_OK)
         return st;
     double off = SC_RAYS_OFFSET * mesh_diag(mesh);
     size_t n = 0;

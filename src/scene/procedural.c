@@ -103,21 +103,40 @@ sc_status sc_proc_sphere(uint64_t n, sc_proc_mesh *g)
     return SC_OK;
 }
 
-sc_status sc_proc_soup(uint64_t n, uint64_t seed, sc_proc_mesh *g)
+static void random_in_cube(sc_rng *r, double c[3])
+{
+    for (int i = 0; i < 3; i++)
+        c[i] = sc_rng_range(r, -1, 1);
+}
+
+/* n unconnected triangles (vertices 3t, 3t+1, 3t+2) and the random stream
+ * of one kind of scene (salt), for the generators to place the vertices. */
+static sc_status alloc_unconnected(sc_proc_mesh *g, uint64_t n, uint64_t seed, uint64_t salt,
+                                   sc_rng *r)
 {
     if (!g || !count_ok(n))
         return SC_ERR_INVALID_ARGUMENT;
     if (alloc_mesh(g, 3 * n, n) != SC_OK)
         return SC_ERR_OUT_OF_MEMORY;
+    for (uint64_t t = 0; t < n; t++)
+        put_t(g, t, 3 * t, 3 * t + 1, 3 * t + 2);
+    sc_rng_seed(r, seed ^ salt);
+    return SC_OK;
+}
+
+sc_status sc_proc_soup(uint64_t n, uint64_t seed, sc_proc_mesh *g)
+{
     sc_rng r;
-    sc_rng_seed(&r, seed ^ 0x736f7570u);
+    sc_status st = alloc_unconnected(g, n, seed, 0x736f7570u, &r);
+    if (st != SC_OK)
+        return st;
     double h = 1.0 / cbrt((double)n);
     for (uint64_t t = 0; t < n; t++) {
-        double c[3] = { sc_rng_range(&r, -1, 1), sc_rng_range(&r, -1, 1), sc_rng_range(&r, -1, 1) };
+        double c[3];
+        random_in_cube(&r, c);
         for (int k = 0; k < 3; k++)
             put_v(g, 3 * t + k, c[0] + sc_rng_range(&r, -h, h), c[1] + sc_rng_range(&r, -h, h),
                   c[2] + sc_rng_range(&r, -h, h));
-        put_t(g, t, 3 * t, 3 * t + 1, 3 * t + 2);
     }
     return SC_OK;
 }
@@ -134,15 +153,14 @@ static void random_unit(sc_rng *r, double v[3])
  * the long edge): the shapes whose circumspheres are worst. */
 sc_status sc_proc_slivers(uint64_t n, uint64_t seed, sc_proc_mesh *g)
 {
-    if (!g || !count_ok(n))
-        return SC_ERR_INVALID_ARGUMENT;
-    if (alloc_mesh(g, 3 * n, n) != SC_OK)
-        return SC_ERR_OUT_OF_MEMORY;
     sc_rng r;
-    sc_rng_seed(&r, seed ^ 0x736c6976u);
+    sc_status st = alloc_unconnected(g, n, seed, 0x736c6976u, &r);
+    if (st != SC_OK)
+        return st;
     double len = 4.0 / cbrt((double)n);
     for (uint64_t t = 0; t < n; t++) {
-        double c[3] = { sc_rng_range(&r, -1, 1), sc_rng_range(&r, -1, 1), sc_rng_range(&r, -1, 1) };
+        double c[3];
+        random_in_cube(&r, c);
         double d[3], e[3], tmp[3];
         random_unit(&r, d);
         random_unit(&r, tmp);
@@ -167,7 +185,6 @@ sc_status sc_proc_slivers(uint64_t n, uint64_t seed, sc_proc_mesh *g)
         put_v(g, 3 * t, a[0], a[1], a[2]);
         put_v(g, 3 * t + 1, b[0], b[1], b[2]);
         put_v(g, 3 * t + 2, p[0], p[1], p[2]);
-        put_t(g, t, 3 * t, 3 * t + 1, 3 * t + 2);
     }
     return SC_OK;
 }
