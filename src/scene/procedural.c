@@ -1,6 +1,7 @@
 /* Procedural meshes (see procedural.h): the generators, the "proc:" spec
  * parser that puts them into a scene, and the fixed test meshes. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -230,6 +231,27 @@ sc_status sc_proc_terrain(uint64_t n, uint64_t seed, sc_proc_mesh *g)
 
 /* ---- proc: specs in a scene ---------------------------------------------- */
 
+/* Parses a count "123", "20k", "1M"; 0 on failure. */
+static int parse_count(const char *text, uint64_t *out)
+{
+    if (!text || *text < '0' || *text > '9')
+        return 0;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(text, &end, 10);
+    if (errno)
+        return 0;
+    uint64_t mul = 1;
+    if (*end == 'k' || *end == 'K')
+        mul = 1000, end++;
+    else if (*end == 'M')
+        mul = 1000000, end++;
+    if (*end != '\0' || v == 0 || v > UINT64_MAX / mul)
+        return 0;
+    *out = v * mul;
+    return 1;
+}
+
 static sc_status add_generated(sc_scene *s, sc_proc_mesh *g, const double xform[16],
                                const float *color, const float def[3], char *err, size_t errlen)
 {
@@ -342,7 +364,7 @@ sc_status sc_scene_load_procedural(sc_scene *s, const char *spec, const double x
     const char *kind = spec + 5;   /* after "proc:" */
     const char *last = strrchr(kind, ':');
     uint64_t n;
-    if (!last || !sc_scene_parse_count(last + 1, &n))
+    if (!last || !parse_count(last + 1, &n))
         return sc_scene_errf(err, errlen, SC_ERR_PARSE,
                              "%s: expected proc:KIND:N with N a positive count (e.g. 100k)", spec);
     /* uint32 indices bound the vertex count whatever the configured cap. */

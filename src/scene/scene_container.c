@@ -1,7 +1,6 @@
 /* The scene container: flat arrays, caps, warnings, lights, camera
  * framing, views and stats. Knows no file format. */
 #define _POSIX_C_SOURCE 200809L
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -506,24 +505,4 @@ sc_status sc_scene_get_stats(const sc_scene *s, sc_scene_stats *st)
     st->bytes_per_triangle = s->num_triangles ? (double)st->bytes / (double)s->num_triangles : 0;
     sc_scene_bounds(s, st->bounds_min, st->bounds_max);
     return SC_OK;
-}
-
-int sc_scene_parse_count(const char *text, uint64_t *out)
-{
-    if (!text || *text < '0' || *text > '9')
-        return 0;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(text, &end, 10);
-    if (errno)
-        return 0;
-    uint64_t mul = 1;
-    if (*end == 'k' || *end == 'K')
-        mul = 1000, end++;
-    else if (*end == 'M')
-        mul = 1000000, end++;
-    if (*end != '\0' || v == 0 || v > UINT64_MAX / mul)
-        return 0;
-    *out = v * mul;
-    return 1;
 }

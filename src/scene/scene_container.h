@@ -73,7 +73,4 @@ sc_status sc_scene_append_triangles(sc_scene *s, const float *positions, size_t 
 /* Bounds of all vertices referenced by triangles (or a unit box when empty). */
 void sc_scene_bounds(const sc_scene *s, double lo[3], double hi[3]);
 
-/* Parses a size "123", "20k", "1M"; 0 on failure. */
-int sc_scene_parse_count(const char *text, uint64_t *out);
-
 #endif
