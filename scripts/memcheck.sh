@@ -9,7 +9,7 @@
 #   ./scripts/memcheck.sh            # uses build/ ($SPHERECULL_BUILD_DIR), builds it if needed
 #
 # Mesh files are imported in a child process by default (src/scene/
-# import_isolated.c); --child-silent-after-fork keeps the child's exit
+# load_assimp_child.c); --child-silent-after-fork keeps the child's exit
 # report out (it leaves with _exit and never frees), and one case imports
 # in-process so assimp's side is checked too. Valgrind reports a CPU
 # without AVX-512, so the kernels run at AVX2 here.

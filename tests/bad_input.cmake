@@ -1,4 +1,4 @@
-# Bad input and faults (issue 7). test_scene_bad is registered with the
+# Bad input and faults. test_scene_bad is registered with the
 # scene tests (scene.cmake); here: the CLI contract and the fuzz corpora.
 
 # Every CLI command on missing/directory/damaged inputs, unwritable outputs

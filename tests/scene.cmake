@@ -1,4 +1,4 @@
-# Scenes (issue 4) and bad input (issue 7): loaders, procedural scenes, PNG.
+# Scenes and bad input: loaders, procedural scenes, PNG.
 if(TARGET spherecull_scene)
   foreach(t test_scene test_scene_bad)
     sc_add_test(${t} SOURCES ${t}.c LIBS spherecull_scene)

@@ -13,10 +13,11 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "sc_test_checked.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_embree.h"
 
-static sc_embree *make(const sc_mesh_view *m, sc_embree_mode mode, int cluster, sc_embree_quality q)
+static sc_embree *make(const sc_checked_mesh *m, sc_embree_mode mode, int cluster, sc_embree_quality q)
 {
     sc_embree_config cfg;
     sc_embree_config_default(&cfg);
@@ -66,7 +67,8 @@ static void test_native_matches_oracle_away_from_edges(void **state)
     (void)state;
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
-    sc_mesh_view m = sc_proc_view(&pm);
+    sc_mesh_view mv = sc_proc_view(&pm);
+    sc_checked_mesh m = sc_test_checked(&mv);
     enum { N = 2000 };
     uint32_t *target = malloc(N * sizeof *target);
     sc_ray *rays = interior_rays(&pm, N, 3, target);
@@ -102,7 +104,8 @@ static void test_packets_match_single_rays(void **state)
     (void)state;
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
-    sc_mesh_view m = sc_proc_view(&pm);
+    sc_mesh_view mv = sc_proc_view(&pm);
+    sc_checked_mesh m = sc_test_checked(&mv);
     enum { N = 1003 };                 /* not a multiple of the packet width */
     uint32_t *target = malloc(N * sizeof *target);
     sc_ray *rays = interior_rays(&pm, N, 4, target);
@@ -134,7 +137,8 @@ static void test_user_prefilter_no_lost_hits(void **state)
     (void)state;
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(4, &pm), SC_OK);
-    sc_mesh_view m = sc_proc_view(&pm);
+    sc_mesh_view mv = sc_proc_view(&pm);
+    sc_checked_mesh m = sc_test_checked(&mv);
     sc_rayset s;
     assert_int_equal(sc_rayset_adversarial(&m, 4000, 21, &s), SC_OK);
     sc_oracle o;
@@ -195,13 +199,14 @@ static void test_memory_and_arguments(void **state)
     (void)state;
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
-    sc_mesh_view m = sc_proc_view(&pm);
+    sc_mesh_view mv = sc_proc_view(&pm);
+    sc_checked_mesh m = sc_test_checked(&mv);
     sc_embree *e = make(&m, SC_EMBREE_DEFAULT, 8, SC_EMBREE_QUALITY_MEDIUM);
     sc_embree_info info;
     assert_int_equal(sc_embree_get_info(e, &info), SC_OK);
-    assert_int_equal(info.triangles, m.triangle_count);
+    assert_int_equal(info.triangles, m.view.triangle_count);
     /* the monitor saw at least the vertex and index copies */
-    assert_true(info.embree_bytes >= 12 * (size_t)m.triangle_count);
+    assert_true(info.embree_bytes >= 12 * (size_t)m.view.triangle_count);
     assert_true(info.embree_peak_bytes >= info.embree_bytes);
     assert_int_equal(info.ours_bytes, 0);
     assert_int_equal(sc_embree_intersect1(e, NULL, 3, NULL, NULL), SC_ERR_INVALID_ARGUMENT);

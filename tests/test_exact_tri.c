@@ -31,7 +31,7 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "sc_ref_ray.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
@@ -39,6 +39,7 @@
 #include "trace/tri_exact.h"
 
 #include "sc_test_meshes.h"
+#include "sc_test_checked.h"
 
 static const int LEAVES[] = { 1, 4, 16 };
 
@@ -403,7 +404,8 @@ static size_t g_wt_disagree;
 static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays, size_t n, int all_configs)
 {
     sc_oracle o;
-    assert_int_equal(sc_oracle_run(m, rays, n, 2, 0, &o), SC_OK);
+    sc_checked_mesh cm = sc_test_checked(m);
+    assert_int_equal(sc_oracle_run(&cm, rays, n, 2, 0, &o), SC_OK);
     {
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
@@ -459,12 +461,13 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
 static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t seed, int want_closed)
 {
     sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt };
+    sc_checked_mesh cm = sc_test_checked(&m);
     int closed = 0;
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(sc_mesh_is_closed(&cm, &closed), SC_OK);
     assert_int_equal(closed, want_closed);
     char label[64];
     sc_rayset adv, rnd;
-    assert_int_equal(sc_rayset_adversarial(&m, nrays, seed, &adv), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, nrays, seed, &adv), SC_OK);
     snprintf(label, sizeof label, "%s adversarial", name);
     run_rays(label, &m, adv.rays, adv.count, 1);
 
@@ -527,7 +530,7 @@ static void test_open_meshes(void **state)
     mesh m;
     sc_proc_mesh pm;
     const double off[3] = { 0.5, -0.25, 1.5 };
-    assert_int_equal(sc_proc_grid(40, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(40, &pm), SC_OK);
     from_proc(&m, &pm, off, 1.0);
     run_mesh("grid", &m, 3000, 7, 0);
     mesh_free(&m);
@@ -567,7 +570,8 @@ static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
 {
     (void)ctx;
     sc_rayset set;
-    assert_int_equal(sc_rayset_adversarial(m, 65536, 1, &set), SC_OK);
+    sc_checked_mesh cm = sc_test_checked(m);
+    assert_int_equal(sc_rayset_adversarial(&cm, 65536, 1, &set), SC_OK);
     size_t ns = 2000;
     sc_ray *sr = malloc(ns * sizeof *sr);
     for (size_t s = 0; s < ns; s++)

@@ -35,13 +35,14 @@
 #include "common/sc_rng.h"
 #include "compare/crossing.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
 #include "spherecull/sc_trace.h"
 #include "trace/tri_watertight.h"
 
 #include "sc_test_meshes.h"
+#include "sc_test_checked.h"
 
 /* ---- hand-built configurations ------------------------------------------- */
 
@@ -155,7 +156,8 @@ static void test_classify_known(void **state)
 static void test_judge(void **state)
 {
     (void)state;
-    sc_mesh_view m = { OP, 10, OI, O_TRIS };
+    sc_mesh_view v = { OP, 10, OI, O_TRIS };
+    sc_checked_mesh m = sc_test_checked(&v);
     sc_ray rays[] = {
         { { -2, -0.5f, 1.5f }, 0, { 1, 0.25f, -0.25f }, INFINITY },  /* touch at t = 2, floor at 26 */
         { { -0.5f, 0, 3 }, 0, { 0.25f, 0, -1 }, INFINITY },          /* in at t = 2, out at 3.6 */
@@ -408,13 +410,14 @@ static void check_oracle_consistent(const sc_oracle *o)
 static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t seed)
 {
     sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt };
+    sc_checked_mesh cm = sc_test_checked(&m);
     int closed = 0;
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(sc_mesh_is_closed(&cm, &closed), SC_OK);
     assert_true(closed);
     sc_rayset set;
-    assert_int_equal(sc_rayset_adversarial(&m, nrays, seed, &set), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, nrays, seed, &set), SC_OK);
     sc_oracle o;
-    assert_int_equal(sc_oracle_run(&m, set.rays, set.count, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o),
+    assert_int_equal(sc_oracle_run(&cm, set.rays, set.count, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o),
                      SC_OK);
     check_oracle_consistent(&o);
     const int leaves[] = { 1, 4, 16 };
@@ -499,10 +502,11 @@ static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
 {
     (void)ctx;
     int closed = 0;
-    sc_mesh_is_closed(m, &closed);
+    sc_checked_mesh cm = sc_test_checked(m);
+    sc_mesh_is_closed(&cm, &closed);
     assert_true(closed);
     sc_rayset set;
-    assert_int_equal(sc_rayset_adversarial(m, 65536, 1, &set), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, 65536, 1, &set), SC_OK);
     size_t ns = 10000, *sample = malloc(ns * sizeof *sample);
     sc_ray *sr = malloc(ns * sizeof *sr);
     for (size_t s = 0; s < ns; s++) {
@@ -510,7 +514,7 @@ static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
         sr[s] = set.rays[sample[s]];
     }
     sc_oracle o;
-    assert_int_equal(sc_oracle_run(m, sr, ns, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o), SC_OK);
+    assert_int_equal(sc_oracle_run(&cm, sr, ns, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o), SC_OK);
     check_oracle_consistent(&o);
     const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_AUTO };
     float *bt = NULL;

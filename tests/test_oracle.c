@@ -14,7 +14,8 @@
 
 #include "common/sc_rng.h"
 #include "compare/oracle.h"
-#include "compare/procedural.h"
+#include "sc_test_checked.h"
+#include "scene/procedural.h"
 #include "sc_ref_ray.h"
 
 /* Two triangles sharing the diagonal of the unit square at z = 0, a fan of
@@ -30,16 +31,16 @@ static const uint32_t I[] = {
     9, 10, 11,                                           /* tri 6 */
 };
 
-static sc_mesh_view scene(void)
+static sc_checked_mesh scene(void)
 {
     sc_mesh_view m = { P, 12, I, 7 };
-    return m;
+    return sc_test_checked(&m);
 }
 
 static void test_constructed_ties(void **state)
 {
     (void)state;
-    sc_mesh_view m = scene();
+    sc_checked_mesh m = scene();
     sc_ray rays[] = {
         { { 0.5f, 0.5f, 1 }, 0, { 0, 0, -1 }, INFINITY },    /* shared edge: {0,1}, t = 1 */
         { { 2, 2, 2 }, 0, { 0, 0, -1 }, INFINITY },          /* fan centre: {2,3,4,5}, t = 2 */
@@ -126,7 +127,8 @@ static void brute(const sc_mesh_view *m, const sc_ray *r, int *hit, double *t, u
 static void check_against_brute(const sc_mesh_view *m, const sc_rayset *s)
 {
     sc_oracle o;
-    assert_int_equal(sc_oracle_run(m, s->rays, s->count, 2, 0, &o), SC_OK);
+    sc_checked_mesh cm = sc_test_checked(m);
+    assert_int_equal(sc_oracle_run(&cm, s->rays, s->count, 2, 0, &o), SC_OK);
     size_t nhit = 0, ntie = 0;
     for (size_t i = 0; i < s->count; i++) {
         int hit;
@@ -160,7 +162,8 @@ static void test_matches_brute_force(void **state)
     /* closed sphere: adversarial (ties at vertices/edges) and random rays */
     assert_int_equal(sc_proc_icosphere(2, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
-    assert_int_equal(sc_rayset_adversarial(&m, 400, 5, &s), SC_OK);
+    sc_checked_mesh cm = sc_test_checked(&m);
+    assert_int_equal(sc_rayset_adversarial(&cm, 400, 5, &s), SC_OK);
     check_against_brute(&m, &s);
     sc_rayset_free(&s);
     assert_int_equal(sc_mesh_bounds(&m, lo, hi), SC_OK);
@@ -193,10 +196,11 @@ static void test_closed_mesh_edge_rays_hit(void **state)
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
+    sc_checked_mesh cm = sc_test_checked(&m);
     sc_rayset s;
-    assert_int_equal(sc_rayset_adversarial(&m, 2000, 17, &s), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, 2000, 17, &s), SC_OK);
     sc_oracle o;
-    assert_int_equal(sc_oracle_run(&m, s.rays, s.count, 2, 0, &o), SC_OK);
+    assert_int_equal(sc_oracle_run(&cm, s.rays, s.count, 2, 0, &o), SC_OK);
     size_t checked = 0;
     for (size_t i = 0; i < s.count; i++) {
         if (!s.exact[i] || s.tag[i] == SC_RAY_TAG_GRAZING)

@@ -11,7 +11,7 @@
 
 #include <mpfr.h>
 
-#include "compare/procedural.h"
+#include "scene/procedural.h"
 #include "spherecull/sc_rays.h"
 
 static int same_set(const sc_rayset *a, const sc_rayset *b)
@@ -27,8 +27,12 @@ static void test_deterministic(void **state)
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
+    sc_checked_mesh cm;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_OK);
     float lo[3], hi[3];
     assert_int_equal(sc_mesh_bounds(&m, lo, hi), SC_OK);
+    assert_memory_equal(lo, cm.lo, sizeof lo);     /* the check measures the same box */
+    assert_memory_equal(hi, cm.hi, sizeof hi);
     sc_rayset a, b, c;
     assert_int_equal(sc_rayset_random(lo, hi, 1000, 7, &a), SC_OK);
     assert_int_equal(sc_rayset_random(lo, hi, 1000, 7, &b), SC_OK);
@@ -41,13 +45,13 @@ static void test_deterministic(void **state)
     assert_memory_equal(d.rays, a.rays, 10 * sizeof *d.rays);
     sc_rayset_free(&a), sc_rayset_free(&b), sc_rayset_free(&c), sc_rayset_free(&d);
 
-    assert_int_equal(sc_rayset_adversarial(&m, 999, 3, &a), SC_OK);
-    assert_int_equal(sc_rayset_adversarial(&m, 999, 3, &b), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, 999, 3, &a), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, 999, 3, &b), SC_OK);
     assert_true(same_set(&a, &b));
     sc_rayset_free(&a), sc_rayset_free(&b);
 
     sc_camera cam;
-    assert_int_equal(sc_camera_for_mesh(&m, 37, 21, &cam), SC_OK);
+    assert_int_equal(sc_camera_for_mesh(&cm, 37, 21, &cam), SC_OK);
     assert_int_equal(sc_rayset_primary(&cam, &a), SC_OK);
     assert_int_equal(sc_rayset_primary(&cam, &b), SC_OK);
     assert_true(same_set(&a, &b));
@@ -103,8 +107,10 @@ static void test_adversarial_targets(void **state)
     sc_proc_mesh pm;
     assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
+    sc_checked_mesh cm;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_OK);
     sc_rayset s;
-    assert_int_equal(sc_rayset_adversarial(&m, 4000, 11, &s), SC_OK);
+    assert_int_equal(sc_rayset_adversarial(&cm, 4000, 11, &s), SC_OK);
     size_t per_tag[SC_RAY_TAG_COUNT] = { 0 }, exact[SC_RAY_TAG_COUNT] = { 0 };
     for (size_t i = 0; i < s.count; i++) {
         per_tag[s.tag[i]]++;
@@ -145,8 +151,10 @@ static void test_shadow_and_diffuse(void **state)
 {
     (void)state;
     sc_proc_mesh pm;
-    assert_int_equal(sc_proc_grid(8, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(8, &pm), SC_OK);
     sc_mesh_view m = sc_proc_view(&pm);
+    sc_checked_mesh cm;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_OK);
     /* two hand-made primary rays: one hits triangle 0, one misses */
     sc_rayset from;
     memset(&from, 0, sizeof from);
@@ -157,18 +165,26 @@ static void test_shadow_and_diffuse(void **state)
     sc_hitrec hits[2] = { { 1 - A[1], 0, 0, 0 }, { INFINITY, 0, 0, SC_HITREC_MISS } };
     const float light[3] = { 0.5f, 3, 0.5f };
     sc_rayset sh, df;
-    assert_int_equal(sc_rayset_shadow(&m, &from, hits, light, &sh), SC_OK);
+    assert_int_equal(sc_rayset_shadow(&cm, &from, hits, light, &sh), SC_OK);
     assert_int_equal(sh.count, 1);
     assert_true(sh.rays[0].tmax == 1.0f);
     assert_true(sh.rays[0].org[1] > A[1]);     /* offset towards the incoming side */
     for (int k = 0; k < 3; k++)
         assert_true(fabs(sh.rays[0].org[k] + sh.rays[0].dir[k] - light[k]) < 1e-6);
-    assert_int_equal(sc_rayset_diffuse(&m, &from, hits, 5, &df), SC_OK);
+    assert_int_equal(sc_rayset_diffuse(&cm, &from, hits, 5, &df), SC_OK);
     assert_int_equal(df.count, 1);
     assert_true(df.rays[0].dir[1] > 0);          /* the hemisphere the ray came from */
     sc_rayset_free(&sh), sc_rayset_free(&df);
-    assert_int_equal(sc_rayset_shadow(&m, &from, NULL, light, &sh), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_rayset_shadow(&cm, &from, NULL, light, &sh), SC_ERR_INVALID_ARGUMENT);
     sc_proc_free(&pm);
+}
+
+/* sc_mesh_is_closed on a view, checked first. */
+static sc_status closed_of(const sc_mesh_view *m, int *closed)
+{
+    sc_checked_mesh cm;
+    sc_status st = sc_mesh_check(m, &cm);
+    return st != SC_OK ? st : sc_mesh_is_closed(&cm, closed);
 }
 
 static void test_closed(void **state)
@@ -179,26 +195,52 @@ static void test_closed(void **state)
     sc_mesh_view m;
     assert_int_equal(sc_proc_icosphere(2, &pm), SC_OK);
     m = sc_proc_view(&pm);
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(closed_of(&m, &closed), SC_OK);
     assert_int_equal(closed, 1);
     sc_proc_free(&pm);
     assert_int_equal(sc_proc_cube(&pm), SC_OK);
     m = sc_proc_view(&pm);
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(closed_of(&m, &closed), SC_OK);
     assert_int_equal(closed, 1);
     /* removing one triangle opens it */
     m.triangle_count = 11;
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(closed_of(&m, &closed), SC_OK);
     assert_int_equal(closed, 0);
     sc_proc_free(&pm);
-    assert_int_equal(sc_proc_grid(4, &pm), SC_OK);
+    assert_int_equal(sc_proc_heightfield(4, &pm), SC_OK);
     m = sc_proc_view(&pm);
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_OK);
+    assert_int_equal(closed_of(&m, &closed), SC_OK);
     assert_int_equal(closed, 0);
     uint32_t bad[3] = { 0, 1, 999 };
     m.indices = bad, m.triangle_count = 1;
-    assert_int_equal(sc_mesh_is_closed(&m, &closed), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(closed_of(&m, &closed), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_mesh_is_closed(NULL, &closed), SC_ERR_INVALID_ARGUMENT);
     sc_proc_free(&pm);
+}
+
+/* The one check: what it refuses, and that a refused mesh leaves nothing to trust. */
+static void test_mesh_check(void **state)
+{
+    (void)state;
+    const float P[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+    const uint32_t I[3] = { 0, 1, 2 }, far[3] = { 0, 1, 3 };
+    sc_mesh_view m = { P, 3, I, 1 };
+    sc_checked_mesh cm;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_OK);
+    assert_ptr_equal(cm.view.positions, P);
+    assert_true(cm.lo[0] == 0 && cm.lo[1] == 0 && cm.hi[0] == 1 && cm.hi[1] == 1 && cm.hi[2] == 0);
+    float Q[9];
+    memcpy(Q, P, sizeof Q);
+    Q[4] = NAN;
+    m.positions = Q;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_ERR_NONFINITE);
+    assert_null(cm.view.positions);
+    m.positions = P, m.indices = far;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_ERR_INVALID_ARGUMENT);
+    m.indices = I, m.triangle_count = 0;
+    assert_int_equal(sc_mesh_check(&m, &cm), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_mesh_check(NULL, &cm), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_mesh_check(&m, NULL), SC_ERR_INVALID_ARGUMENT);
 }
 
 int main(void)
@@ -209,6 +251,7 @@ int main(void)
         cmocka_unit_test(test_adversarial_targets),
         cmocka_unit_test(test_shadow_and_diffuse),
         cmocka_unit_test(test_closed),
+        cmocka_unit_test(test_mesh_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -91,10 +91,12 @@ typedef struct sc_embree_info {
     size_t ours_bytes;             /* cluster storage of the user modes */
 } sc_embree_info;
 
-/* Builds and commits the scene. SC_ERR_INVALID_ARGUMENT for a bad mesh or
- * config, SC_ERR_UNSUPPORTED if Embree refuses the device (old CPU),
+/* Builds and commits the scene from a mesh that passed sc_mesh_check (it is
+ * trusted, not checked again). SC_ERR_INVALID_ARGUMENT for a NULL mesh or a
+ * bad config, SC_ERR_UNSUPPORTED if Embree refuses the device (old CPU),
  * SC_ERR_OUT_OF_MEMORY. The mesh is copied; it need not outlive the call. */
-sc_status sc_embree_create(const sc_mesh_view *mesh, const sc_embree_config *cfg, sc_embree **out);
+sc_status sc_embree_create(const sc_checked_mesh *mesh, const sc_embree_config *cfg,
+                           sc_embree **out);
 void sc_embree_destroy(sc_embree *e);
 sc_status sc_embree_get_info(const sc_embree *e, sc_embree_info *info);
 

@@ -53,6 +53,16 @@ typedef struct sc_mesh_view {
     uint32_t triangle_count;
 } sc_mesh_view;
 
+/* A mesh view that passed sc_mesh_check, with the bounds of the vertices its
+ * triangles reference. The ray generators, the oracle and the Embree back end
+ * take this type and trust it: a mesh is checked and measured once, where it
+ * enters, not again by every function it passes through. Make it with
+ * sc_mesh_check only, and check again if the arrays change. */
+typedef struct sc_checked_mesh {
+    sc_mesh_view view;
+    float lo[3], hi[3];
+} sc_checked_mesh;
+
 /* One traced ray's answer; prim == SC_HITREC_MISS for a miss. 16 bytes. */
 #define SC_HITREC_MISS UINT32_MAX
 typedef struct sc_hitrec {
@@ -99,37 +109,39 @@ const char *sc_ray_tag_name(sc_ray_tag tag);
 /* Frees the arrays and zeroes the struct; NULL and zeroed sets are fine. */
 void sc_rayset_free(sc_rayset *set);
 
-/* Checks a mesh view: non-NULL arrays, indices in range, finite positions.
- * SC_ERR_INVALID_ARGUMENT / SC_ERR_NONFINITE otherwise. */
-sc_status sc_mesh_view_check(const sc_mesh_view *mesh);
+/* Checks a mesh view (non-NULL arrays, at least one vertex and triangle,
+ * indices in range, finite positions) and fills *out with it and its
+ * bounds. SC_ERR_INVALID_ARGUMENT / SC_ERR_NONFINITE otherwise, *out zeroed. */
+sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out);
 
-/* Axis-aligned bounds of the referenced vertices. */
+/* Axis-aligned bounds of the referenced vertices of an unchecked view (a
+ * checked mesh carries them). */
 sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3]);
 
 /* *closed = 1 iff, after welding identical positions, every edge is used by
  * exactly two triangles (degenerate triangles ignored). */
-sc_status sc_mesh_is_closed(const sc_mesh_view *mesh, int *closed);
+sc_status sc_mesh_is_closed(const sc_checked_mesh *mesh, int *closed);
 
 sc_status sc_rayset_primary(const sc_camera *cam, sc_rayset *out);
 
 /* from: the set whose hits are given (usually primary); hits: one per ray of
  * from. Misses produce no ray, so out->count <= from->count. */
-sc_status sc_rayset_shadow(const sc_mesh_view *mesh, const sc_rayset *from, const sc_hitrec *hits,
-                           const float light[3], sc_rayset *out);
-sc_status sc_rayset_diffuse(const sc_mesh_view *mesh, const sc_rayset *from, const sc_hitrec *hits,
-                            uint64_t seed, sc_rayset *out);
+sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
+                           const sc_hitrec *hits, const float light[3], sc_rayset *out);
+sc_status sc_rayset_diffuse(const sc_checked_mesh *mesh, const sc_rayset *from,
+                            const sc_hitrec *hits, uint64_t seed, sc_rayset *out);
 
-/* lo/hi: the origin box (usually sc_mesh_bounds). count >= 1. */
+/* lo/hi: the origin box (usually the mesh bounds). count >= 1. */
 sc_status sc_rayset_random(const float lo[3], const float hi[3], size_t count, uint64_t seed,
                            sc_rayset *out);
 
 /* count >= 1; the mesh needs at least one non-degenerate triangle. */
-sc_status sc_rayset_adversarial(const sc_mesh_view *mesh, size_t count, uint64_t seed,
+sc_status sc_rayset_adversarial(const sc_checked_mesh *mesh, size_t count, uint64_t seed,
                                 sc_rayset *out);
 
 /* A camera that frames the mesh's bounding box from the +z/+y diagonal
  * (used when a scene brings no camera). */
-sc_status sc_camera_for_mesh(const sc_mesh_view *mesh, int width, int height, sc_camera *cam);
+sc_status sc_camera_for_mesh(const sc_checked_mesh *mesh, int width, int height, sc_camera *cam);
 
 #ifdef __cplusplus
 }

@@ -346,10 +346,15 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
         sc_scene_free(scene);
         return 1;
     }
-    sc_mesh_view mesh = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
+    sc_mesh_view view = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
+    sc_checked_mesh mesh;
+    if ((st = sc_mesh_check(&view, &mesh)) != SC_OK) {
+        sc_cli_error(CMD, "%s: bad mesh: %s", spec, sc_strerror(st));
+        sc_scene_free(scene);
+        return 1;
+    }
     const size_t ntri = v.num_triangles;
-    float lo[3], hi[3];
-    sc_mesh_bounds(&mesh, lo, hi);
+    const float *lo = mesh.lo, *hi = mesh.hi;
     sc_camera cam = v.camera;
     cam.width = o->width, cam.height = o->height;
     float light[3];

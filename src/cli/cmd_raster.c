@@ -754,8 +754,9 @@ int sc_cmd_raster_check(int argc, char **argv)
 
 #ifdef SC_HAVE_EMBREE
     if (use_embree) {
-        sc_mesh_view mv = { L.mesh.positions, (uint32_t)L.mesh.vertex_count, L.mesh.indices,
-                            (uint32_t)L.mesh.triangle_count };
+        sc_mesh_view view = { L.mesh.positions, (uint32_t)L.mesh.vertex_count, L.mesh.indices,
+                              (uint32_t)L.mesh.triangle_count };
+        sc_checked_mesh mv;
         sc_embree_config ecfg;
         sc_embree_config_default(&ecfg);
         sc_embree *e = NULL;
@@ -768,7 +769,9 @@ int sc_cmd_raster_check(int argc, char **argv)
             sc_cli_error(cmd, "out of memory");
             goto done;
         }
-        st = sc_embree_create(&mv, &ecfg, &e);
+        st = sc_mesh_check(&view, &mv);
+        if (st == SC_OK)
+            st = sc_embree_create(&mv, &ecfg, &e);
         if (st == SC_OK) {
             t0 = now_seconds();
             st = sc_embree_intersect1(e, rays.rays, rays.count, hits, NULL);

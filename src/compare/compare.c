@@ -78,8 +78,9 @@ typedef struct tracer {
     int fp_exact;         /* false positives are counted exactly */
 } tracer;
 
-static sc_status tracer_build(tracer *t, const tracer_def *def, const sc_mesh_view *m)
+static sc_status tracer_build(tracer *t, const tracer_def *def, const sc_checked_mesh *checked)
 {
+    const sc_mesh_view *m = &checked->view;
     memset(t, 0, sizeof *t);
     t->def = def;
     if (def->fam == FAM_SPHERECULL) {
@@ -114,7 +115,7 @@ static sc_status tracer_build(tracer *t, const tracer_def *def, const sc_mesh_vi
     if (def->cluster)
         cfg.cluster_size = def->cluster;
     sc_embree *e;
-    sc_status st = sc_embree_create(m, &cfg, &e);
+    sc_status st = sc_embree_create(checked, &cfg, &e);
     if (st != SC_OK)
         return st;
     sc_embree_info info;
@@ -377,7 +378,7 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
     free(terr);
 }
 
-sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
+sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *view, const sc_camera *camera,
                        const float light[3], const sc_cmp_options *opt, sc_cmp_rows *out, FILE *log,
                        char *err, size_t errlen)
 {
@@ -389,7 +390,9 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
     for (int k = 0; k < opt->nthreads; k++)
         if (opt->threads[k] < 1 || opt->threads[k] > SC_CMP_MAX_THREADS)
             return SC_ERR_INVALID_ARGUMENT;
-    sc_status st = sc_mesh_view_check(mesh);
+    sc_checked_mesh checked;
+    const sc_checked_mesh *mesh = &checked;
+    sc_status st = sc_mesh_check(view, &checked);
     if (st != SC_OK) {
         if (err) snprintf(err, errlen, "%s: bad mesh: %s", scene_name, sc_strerror(st));
         return st;
@@ -461,9 +464,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         }
         if (log) fprintf(log, "  shadow/diffuse origins from %s's primary hits\n", rd->name);
     }
-    float lo[3], hi[3];
-    sc_mesh_bounds(mesh, lo, hi);
-    if ((st = sc_rayset_random(lo, hi, opt->random_rays ? opt->random_rays : 1, opt->seed,
+    if ((st = sc_rayset_random(mesh->lo, mesh->hi, opt->random_rays ? opt->random_rays : 1, opt->seed,
                                &sets[SC_RAYS_RANDOM])) != SC_OK ||
         (st = sc_rayset_adversarial(mesh, opt->adversarial_rays ? opt->adversarial_rays : 1, opt->seed,
                                     &sets[SC_RAYS_ADVERSARIAL])) != SC_OK) {
@@ -545,7 +546,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
                     goto done;
                 }
                 snprintf(row->scene, sizeof row->scene, "%s", scene_name);
-                row->triangles = mesh->triangle_count;
+                row->triangles = mesh->view.triangle_count;
                 row->closed = closed;
                 row->rays = (sc_rayset_kind)k;
                 row->nrays = set->count;

@@ -1,28 +1,14 @@
-/* Mesh checks, bounds, welding and the edge table. */
+/* The mesh check, bounds, welding and the edge table. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "mesh_edges.h"
 
-sc_status sc_mesh_view_check(const sc_mesh_view *mesh)
+/* Bounds of the vertices the triangles reference; SC_ERR_INVALID_ARGUMENT
+ * for an index out of range, SC_ERR_NONFINITE for a non-finite vertex. */
+static sc_status referenced_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
 {
-    if (!mesh || !mesh->positions || !mesh->indices || mesh->vertex_count == 0 ||
-        mesh->triangle_count == 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; i++)
-        if (!isfinite(mesh->positions[i]))
-            return SC_ERR_NONFINITE;
-    for (size_t i = 0; i < 3 * (size_t)mesh->triangle_count; i++)
-        if (mesh->indices[i] >= mesh->vertex_count)
-            return SC_ERR_INVALID_ARGUMENT;
-    return SC_OK;
-}
-
-sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
-{
-    if (!mesh || !mesh->positions || !mesh->indices || !lo || !hi || mesh->triangle_count == 0)
-        return SC_ERR_INVALID_ARGUMENT;
     for (int k = 0; k < 3; k++)
         lo[k] = INFINITY, hi[k] = -INFINITY;
     for (size_t i = 0; i < 3 * (size_t)mesh->triangle_count; i++) {
@@ -38,6 +24,31 @@ sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
         }
     }
     return SC_OK;
+}
+
+sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!view || !view->positions || !view->indices || view->vertex_count == 0 ||
+        view->triangle_count == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (size_t i = 0; i < 3 * (size_t)view->vertex_count; i++)
+        if (!isfinite(view->positions[i]))
+            return SC_ERR_NONFINITE;
+    sc_status st = referenced_bounds(view, out->lo, out->hi);
+    if (st != SC_OK)
+        return st;
+    out->view = *view;
+    return SC_OK;
+}
+
+sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
+{
+    if (!mesh || !mesh->positions || !mesh->indices || !lo || !hi || mesh->triangle_count == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    return referenced_bounds(mesh, lo, hi);
 }
 
 typedef struct weld_key {
@@ -71,12 +82,9 @@ int sc_edge_table_tri_ok(const sc_edge_table *t, const sc_mesh_view *mesh, uint3
 
 sc_status sc_edge_table_build(const sc_mesh_view *mesh, sc_edge_table *out)
 {
-    if (!out)
+    if (!out || !mesh)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    sc_status st = sc_mesh_view_check(mesh);
-    if (st != SC_OK)
-        return st;
     size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
     weld_key *order = malloc(nv * sizeof *order);
     out->canon = malloc(nv * sizeof *out->canon);
@@ -128,13 +136,15 @@ void sc_edge_table_free(sc_edge_table *t)
     memset(t, 0, sizeof *t);
 }
 
-sc_status sc_mesh_is_closed(const sc_mesh_view *mesh, int *closed)
+sc_status sc_mesh_is_closed(const sc_checked_mesh *mesh, int *closed)
 {
     if (!closed)
         return SC_ERR_INVALID_ARGUMENT;
     *closed = 0;
+    if (!mesh)
+        return SC_ERR_INVALID_ARGUMENT;
     sc_edge_table t;
-    sc_status st = sc_edge_table_build(mesh, &t);
+    sc_status st = sc_edge_table_build(&mesh->view, &t);
     if (st != SC_OK)
         return st;
     int ok = t.count > 0;

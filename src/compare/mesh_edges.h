@@ -1,5 +1,6 @@
-/* Welded edge table of a mesh view, shared by sc_mesh_is_closed and the
- * adversarial ray generator. Private to src/compare. */
+/* Welded edge table of a mesh view, shared by sc_mesh_is_closed, the
+ * adversarial ray generator and the icosphere's welding in
+ * src/scene/procedural.c. Private to the library. */
 #ifndef SPHERECULL_COMPARE_MESH_EDGES_H
 #define SPHERECULL_COMPARE_MESH_EDGES_H
 
@@ -18,6 +19,8 @@ typedef struct sc_edge_table {
     size_t count;
 } sc_edge_table;
 
+/* mesh must be valid (sc_mesh_check, or built valid): it is not checked
+ * again here. */
 sc_status sc_edge_table_build(const sc_mesh_view *mesh, sc_edge_table *out);
 void sc_edge_table_free(sc_edge_table *t);
 

@@ -68,14 +68,12 @@ static int cmp_cand(const void *pa, const void *pb)
     return (a->k > b->k) - (a->k < b->k);
 }
 
-static sc_status mesh_prepare(const sc_mesh_view *mesh, oracle_mesh *m)
+static sc_status mesh_prepare(const sc_checked_mesh *checked, oracle_mesh *m)
 {
     memset(m, 0, sizeof *m);
+    const sc_mesh_view *mesh = &checked->view;
+    const float *lo = checked->lo, *hi = checked->hi;
     size_t nt = mesh->triangle_count;
-    float lo[3], hi[3];
-    sc_status st = sc_mesh_bounds(mesh, lo, hi);
-    if (st != SC_OK)
-        return st;
     mkey *keys = malloc(nt * sizeof *keys);
     m->v = malloc(nt * sizeof *m->v);
     m->id = malloc(nt * sizeof *m->id);
@@ -311,17 +309,16 @@ out:
     return NULL;
 }
 
-sc_status sc_oracle_run(const sc_mesh_view *mesh, const sc_ray *rays, size_t n, int threads,
+sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t n, int threads,
                         int flags, sc_oracle *out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    if ((n && !rays) || threads < 1 || threads > 256 || (flags & ~(SC_ORACLE_LATER_HIT | SC_ORACLE_CROSSING)))
+    if (!mesh || (n && !rays) || threads < 1 || threads > 256 ||
+        (flags & ~(SC_ORACLE_LATER_HIT | SC_ORACLE_CROSSING)))
         return SC_ERR_INVALID_ARGUMENT;
-    sc_status st = sc_mesh_view_check(mesh);
-    if (st != SC_OK)
-        return st;
+    sc_status st;
     oracle_mesh m;
     if ((st = mesh_prepare(mesh, &m)) != SC_OK) {
         mesh_release(&m);

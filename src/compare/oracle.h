@@ -52,8 +52,9 @@ enum { SC_ORACLE_LATER_HIT = 1, SC_ORACLE_CROSSING = 2 };
 /* threads >= 1; flags: any of SC_ORACLE_LATER_HIT (also fill `crosses`) and
  * SC_ORACLE_CROSSING (also fill first_kind, cross_t, cross_ties: every
  * candidate is decided exactly, with the symbolic perturbation of
- * crossing.h). SC_ERR_INVALID_ARGUMENT for a bad mesh or arguments. */
-sc_status sc_oracle_run(const sc_mesh_view *mesh, const sc_ray *rays, size_t n, int threads,
+ * crossing.h). The mesh is trusted (sc_mesh_check). SC_ERR_INVALID_ARGUMENT
+ * for bad arguments. */
+sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t n, int threads,
                         int flags, sc_oracle *out);
 void sc_oracle_free(sc_oracle *o);
 

@@ -140,14 +140,11 @@ static void basis(const double n[3], double t[3], double b[3])
     cross3(b, n, t);
 }
 
-static double mesh_diag(const sc_mesh_view *mesh)
+static double mesh_diag(const sc_checked_mesh *mesh)
 {
-    float lo[3], hi[3];
-    if (sc_mesh_bounds(mesh, lo, hi) != SC_OK)
-        return 1;
     double d2 = 0;
     for (int k = 0; k < 3; k++)
-        d2 += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+        d2 += ((double)mesh->hi[k] - mesh->lo[k]) * ((double)mesh->hi[k] - mesh->lo[k]);
     return d2 > 0 ? sqrt(d2) : 1;
 }
 
@@ -197,31 +194,32 @@ static int hit_frame(const sc_mesh_view *mesh, const sc_ray *r, const sc_hitrec 
     return 1;
 }
 
-static sc_status check_from(const sc_mesh_view *mesh, const sc_rayset *from, const sc_hitrec *hits)
-{
-    if (!from || !hits || (!from->rays && from->count))
-        return SC_ERR_INVALID_ARGUMENT;
-    return sc_mesh_view_check(mesh);
-}
-
-sc_status sc_rayset_shadow(const sc_mesh_view *mesh, const sc_rayset *from, const sc_hitrec *hits,
-                           const float light[3], sc_rayset *out)
+/* The start of a set made from the hits of another: *out cleared, the
+ * arguments checked (args_ok: the caller's own), room for one ray per hit. */
+static sc_status start_from_hits(const sc_checked_mesh *mesh, const sc_rayset *from,
+                                 const sc_hitrec *hits, int args_ok, sc_rayset_kind kind,
+                                 sc_rayset *out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    sc_status st = check_from(mesh, from, hits);
-    if (st != SC_OK)
-        return st;
-    if (!light || !isfinite(light[0]) || !isfinite(light[1]) || !isfinite(light[2]))
+    if (!mesh || !from || !hits || (!from->rays && from->count) || !args_ok)
         return SC_ERR_INVALID_ARGUMENT;
-    if ((st = rayset_alloc(out, SC_RAYS_SHADOW, from->count)) != SC_OK)
+    return rayset_alloc(out, kind, from->count);
+}
+
+sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
+                           const sc_hitrec *hits, const float light[3], sc_rayset *out)
+{
+    int light_ok = light && isfinite(light[0]) && isfinite(light[1]) && isfinite(light[2]);
+    sc_status st = start_from_hits(mesh, from, hits, light_ok, SC_RAYS_SHADOW, out);
+    if (st != SC_OK)
         return st;
     double off = SC_RAYS_OFFSET * mesh_diag(mesh);
     size_t n = 0;
     for (size_t i = 0; i < from->count; i++) {
         double p[3], nrm[3], d[3];
-        if (!hit_frame(mesh, &from->rays[i], &hits[i], off, p, nrm))
+        if (!hit_frame(&mesh->view, &from->rays[i], &hits[i], off, p, nrm))
             continue;
         double o[3] = { (float)p[0], (float)p[1], (float)p[2] };
         for (int k = 0; k < 3; k++)
@@ -233,22 +231,17 @@ sc_status sc_rayset_shadow(const sc_mesh_view *mesh, const sc_rayset *from, cons
     return SC_OK;
 }
 
-sc_status sc_rayset_diffuse(const sc_mesh_view *mesh, const sc_rayset *from, const sc_hitrec *hits,
-                            uint64_t seed, sc_rayset *out)
+sc_status sc_rayset_diffuse(const sc_checked_mesh *mesh, const sc_rayset *from,
+                            const sc_hitrec *hits, uint64_t seed, sc_rayset *out)
 {
-    if (!out)
-        return SC_ERR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
-    sc_status st = check_from(mesh, from, hits);
+    sc_status st = start_from_hits(mesh, from, hits, 1, SC_RAYS_DIFFUSE, out);
     if (st != SC_OK)
-        return st;
-    if ((st = rayset_alloc(out, SC_RAYS_DIFFUSE, from->count)) != SC_OK)
         return st;
     double off = SC_RAYS_OFFSET * mesh_diag(mesh);
     size_t n = 0;
     for (size_t i = 0; i < from->count; i++) {
         double p[3], nrm[3], t[3], b[3], d[3];
-        if (!hit_frame(mesh, &from->rays[i], &hits[i], off, p, nrm))
+        if (!hit_frame(&mesh->view, &from->rays[i], &hits[i], off, p, nrm))
             continue;
         sc_rng r;
         ray_rng(&r, seed, i);
@@ -395,14 +388,15 @@ static void side_dir(sc_rng *r, const double n[3], int sign, double w[3])
             w[k] = -w[k];
 }
 
-sc_status sc_rayset_adversarial(const sc_mesh_view *mesh, size_t count, uint64_t seed,
+sc_status sc_rayset_adversarial(const sc_checked_mesh *checked, size_t count, uint64_t seed,
                                 sc_rayset *out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    if (count == 0)
+    if (!checked || count == 0)
         return SC_ERR_INVALID_ARGUMENT;
+    const sc_mesh_view *mesh = &checked->view;
     sc_edge_table et;
     sc_status st = sc_edge_table_build(mesh, &et);
     if (st != SC_OK)
@@ -436,7 +430,7 @@ sc_status sc_rayset_adversarial(const sc_mesh_view *mesh, size_t count, uint64_t
         free(good), free(shared), sc_edge_table_free(&et);
         return st;
     }
-    double diag = mesh_diag(mesh);
+    double diag = mesh_diag(checked);
     for (size_t i = 0; i < count; i++) {
         sc_rng r;
         ray_rng(&r, seed, i);
@@ -518,22 +512,13 @@ sc_status sc_rayset_adversarial(const sc_mesh_view *mesh, size_t count, uint64_t
     return SC_OK;
 }
 
-sc_status sc_camera_for_mesh(const sc_mesh_view *mesh, int width, int height, sc_camera *cam)
+sc_status sc_camera_for_mesh(const sc_checked_mesh *mesh, int width, int height, sc_camera *cam)
 {
-    if (!cam || width < 1 || height < 1)
+    if (!mesh || !cam || width < 1 || height < 1)
         return SC_ERR_INVALID_ARGUMENT;
-    float lo[3], hi[3];
-    sc_status st = sc_mesh_bounds(mesh, lo, hi);
-    if (st != SC_OK)
-        return st;
-    double c[3], diag = 0;
-    for (int k = 0; k < 3; k++) {
-        c[k] = 0.5 * ((double)lo[k] + hi[k]);
-        diag += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
-    }
-    diag = sqrt(diag);
-    if (!(diag > 0))
-        diag = 1;
+    double c[3], diag = mesh_diag(mesh);
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * ((double)mesh->lo[k] + mesh->hi[k]);
     double dir[3] = { 0.35, 0.45, 0.82 };
     normalize3(dir);
     double dist = 0.5 * diag / tan(22.5 * PI / 180) * 1.05;

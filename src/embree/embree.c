@@ -137,8 +137,9 @@ static int cmp_u32(const void *pa, const void *pb)
     return (a > b) - (a < b);
 }
 
-static sc_status build_clusters(sc_embree *e, const sc_mesh_view *m)
+static sc_status build_clusters(sc_embree *e, const sc_checked_mesh *checked)
 {
+    const sc_mesh_view *m = &checked->view;
     const size_t nt = m->triangle_count;
     const int k = e->cfg.cluster_size;
     float *cent = malloc(3 * nt * sizeof *cent);
@@ -181,8 +182,7 @@ static sc_status build_clusters(sc_embree *e, const sc_mesh_view *m)
         return SC_ERR_OUT_OF_MEMORY;
     }
     double diag_sum = 0;
-    float slo[3], shi[3];
-    sc_mesh_bounds(m, slo, shi);
+    const float *slo = checked->lo, *shi = checked->hi;
     double sdiag = sqrt(((double)shi[0] - slo[0]) * ((double)shi[0] - slo[0]) +
                         ((double)shi[1] - slo[1]) * ((double)shi[1] - slo[1]) +
                         ((double)shi[2] - slo[2]) * ((double)shi[2] - slo[2]));
@@ -359,15 +359,17 @@ static sc_status check_config(const sc_embree_config *cfg)
     return SC_OK;
 }
 
-sc_status sc_embree_create(const sc_mesh_view *mesh, const sc_embree_config *cfg, sc_embree **out)
+sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_config *cfg,
+                           sc_embree **out)
 {
     if (!out || !cfg)
         return SC_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    sc_status st = sc_mesh_view_check(mesh);
+    if (!checked)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_mesh_view *mesh = &checked->view;
+    sc_status st = check_config(cfg);
     if (st != SC_OK)
-        return st;
-    if ((st = check_config(cfg)) != SC_OK)
         return st;
     sc_embree *e = calloc(1, sizeof *e);
     if (!e)
@@ -409,7 +411,7 @@ sc_status sc_embree_create(const sc_mesh_view *mesh, const sc_embree_config *cfg
         memcpy(vb, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
         memcpy(ib, mesh->indices, 3 * sizeof(unsigned) * mesh->triangle_count);
     } else {
-        if ((st = build_clusters(e, mesh)) != SC_OK) {
+        if ((st = build_clusters(e, checked)) != SC_OK) {
             sc_embree_destroy(e);
             return st;
         }

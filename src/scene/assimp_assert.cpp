@@ -36,7 +36,7 @@ extern "C" int sc_scene_assimp_assert_hook(void)
     return 1;
 }
 
-// In the import child (import_isolated.c) only: an exception that cannot be
+// In the import child (load_assimp_child.c) only: an exception that cannot be
 // caught (the COB reader throws from a destructor while unwinding, so the
 // runtime calls std::terminate) still carries the reason in what(); hand it
 // to the child's reporter instead of letting abort() lose it.

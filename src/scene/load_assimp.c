@@ -14,7 +14,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "scene_internal.h"
+#include "load_assimp.h"
 
 /* Deep enough for any real hierarchy, shallow enough that a hostile file
  * cannot exhaust the stack through us. */
@@ -335,19 +335,6 @@ static int sanitize(struct aiScene *ai, const char *path, char *err, size_t errl
         mesh->mPrimitiveTypes = types;
     }
     return 0;
-}
-
-sc_status sc_scene_load_assimp(sc_scene *s, const char *path, const double xform[16],
-                               const float *color, char *err, size_t errlen)
-{
-    /* Checked here, in the caller, so the common mistakes (missing file,
-     * directory, empty file) cost no fork and give the precise message. */
-    sc_status st = sc_scene_check_mesh_file(path, err, errlen);
-    if (st != SC_OK)
-        return st;
-    if (s->import_in_process)
-        return sc_scene_import_assimp(s, path, xform, color, 1, err, errlen);
-    return sc_scene_import_isolated(s, path, xform, color, err, errlen);
 }
 
 sc_status sc_scene_import_assimp(sc_scene *s, const char *path, const double xform[16],

@@ -12,7 +12,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "scene_internal.h"
+#include "load_json.h"
 
 #define MAX_JSON_BYTES (16u << 20)
 #define MAX_MESHES_IN_JSON 100000
@@ -22,6 +22,7 @@
 typedef struct jctx {
     sc_scene *s;
     const char *path;
+    sc_scene_append_fn append_mesh;
     char *err;
     size_t errlen;
 } jctx;
@@ -198,19 +199,9 @@ static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
         int any;
         if (mesh_transform(c, m, where, xf, &any) < 0)
             return SC_ERR_PARSE;
-        const char *spec = f->valuestring;
-        char *path = NULL;
-        sc_status st;
-        if (strncmp(spec, "proc:", 5) != 0 && strncmp(spec, "cache:", 6) != 0) {
-            st = sc_scene_expand_path(c->s, spec, base_dir, &path, c->err, c->errlen);
-            if (st != SC_OK)
-                return st;
-            spec = path;
-        }
         size_t before = c->s->num_triangles;
-        st = sc_scene_append_spec(c->s, spec, any ? xf : NULL, has_color == 1 ? color : NULL,
-                                  c->err, c->errlen);
-        free(path);
+        sc_status st = c->append_mesh(c->s, f->valuestring, base_dir, any ? xf : NULL,
+                                      has_color == 1 ? color : NULL, c->err, c->errlen);
         if (st != SC_OK)
             return st;
         if (c->s->num_triangles == before)
@@ -295,7 +286,7 @@ static sc_status load_ground(jctx *c, const cJSON *root)
     /* A square under the meshes, perpendicular to +y, touching the lowest
      * point so that contact shadows show. */
     double lo[3], hi[3], r2 = 0;
-    sc_scene_bounds(c->s, 0, lo, hi);
+    sc_scene_bounds(c->s, lo, hi);
     for (int i = 0; i < 3; i++)
         r2 += 0.25 * (hi[i] - lo[i]) * (hi[i] - lo[i]);
     double half = size * sqrt(r2), cx = 0.5 * (lo[0] + hi[0]), cz = 0.5 * (lo[2] + hi[2]);
@@ -405,9 +396,10 @@ static sc_status read_file(jctx *c, char **out, size_t *len)
     return SC_OK;
 }
 
-sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t errlen)
+sc_status sc_scene_load_json_file(sc_scene *s, const char *path, sc_scene_append_fn append_mesh,
+                                  char *err, size_t errlen)
 {
-    jctx c = { s, path, err, errlen };
+    jctx c = { s, path, append_mesh, err, errlen };
     char *buf = NULL;
     size_t len = 0;
     sc_status st = read_file(&c, &buf, &len);
@@ -425,16 +417,17 @@ sc_status sc_scene_load_json(sc_scene *s, const char *path, char *err, size_t er
         strcpy(dir, ".");
     if (p == dir)
         strcpy(dir, "/");
-    st = sc_scene_load_json_buffer(s, path, dir, buf, len, err, errlen);
+    st = sc_scene_load_json_buffer(s, path, dir, buf, len, append_mesh, err, errlen);
     free(dir);
     free(buf);
     return st;
 }
 
 sc_status sc_scene_load_json_buffer(sc_scene *s, const char *path, const char *base_dir,
-                                    const char *buf, size_t len, char *err, size_t errlen)
+                                    const char *buf, size_t len, sc_scene_append_fn append_mesh,
+                                    char *err, size_t errlen)
 {
-    jctx c = { s, path, err, errlen };
+    jctx c = { s, path, append_mesh, err, errlen };
     sc_status st = SC_OK;
     if (len == 0)
         return JERR(&c, SC_ERR_PARSE, "%s: empty scene description", path);

@@ -30,7 +30,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "scene_internal.h"
+#include "load_assimp.h"
 
 /* assimp_assert.cpp: routes std::terminate's exception message and a
  * failed operator new to these reporters (which end the child). */
@@ -398,8 +398,8 @@ static sc_status receive_scene(sc_scene *s, reader *r, const wire_head *h, const
     return SC_OK;
 }
 
-sc_status sc_scene_import_isolated(sc_scene *s, const char *path, const double xform[16],
-                                   const float *color, char *err, size_t errlen)
+sc_status sc_scene_import_assimp_in_child(sc_scene *s, const char *path, const double xform[16],
+                                          const float *color, char *err, size_t errlen)
 {
     int fds[2];
     if (pipe2(fds, O_CLOEXEC) != 0)

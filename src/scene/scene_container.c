@@ -1,14 +1,12 @@
-/* The scene container: flat arrays, caps, warnings, camera framing. */
+/* The scene container: flat arrays, caps, warnings, lights, camera
+ * framing, views and stats. Knows no file format. */
 #define _POSIX_C_SOURCE 200809L
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
-#include "scene_internal.h"
+#include "scene_container.h"
 
 void sc_scene_options_init(sc_scene_options *o)
 {
@@ -138,6 +136,24 @@ sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out)
     s->ambient = 0.15f;
     *out = s;
     return SC_OK;
+}
+
+sc_status sc_scene_create_nested(const sc_scene *parent, sc_scene **out)
+{
+    sc_scene_options o;
+    sc_scene_options_init(&o);
+    o.max_triangles = parent->max_triangles;
+    o.mesh_cache_dir = parent->cache_dir;
+    o.seed = parent->seed;
+    o.warn = parent->warn;
+    o.warn_ctx = parent->warn_ctx;
+    o.import_timeout_ms = parent->import_timeout_ms;
+    o.import_in_process = parent->import_in_process;
+    o.max_import_bytes = parent->max_import_bytes;
+    sc_status st = sc_scene_create(&o, out);
+    if (st == SC_OK)
+        (*out)->depth = parent->depth + 1;
+    return st;
 }
 
 void sc_scene_free(sc_scene *s)
@@ -380,13 +396,13 @@ sc_status sc_scene_set_background(sc_scene *s, const float rgb[3])
     return SC_OK;
 }
 
-void sc_scene_bounds(const sc_scene *s, size_t first, double lo[3], double hi[3])
+void sc_scene_bounds(const sc_scene *s, double lo[3], double hi[3])
 {
     for (int i = 0; i < 3; i++) {
         lo[i] = INFINITY;
         hi[i] = -INFINITY;
     }
-    for (size_t k = 3 * first; k < 3 * s->num_triangles; k++) {
+    for (size_t k = 0; k < 3 * s->num_triangles; k++) {
         const float *p = s->positions + 3 * (size_t)s->indices[k];
         for (int i = 0; i < 3; i++) {
             if (p[i] < lo[i])
@@ -407,7 +423,7 @@ sc_status sc_scene_frame_camera(sc_scene *s, double az, double el, double fov, i
     if (!s || !isfinite(az) || !isfinite(el) || !(fov > 0 && fov < 180) || w < 1 || h < 1)
         return SC_ERR_INVALID_ARGUMENT;
     double lo[3], hi[3], c[3], r2 = 0;
-    sc_scene_bounds(s, 0, lo, hi);
+    sc_scene_bounds(s, lo, hi);
     for (int i = 0; i < 3; i++) {
         c[i] = 0.5 * lo[i] + 0.5 * hi[i];
         double e = 0.5 * hi[i] - 0.5 * lo[i];
@@ -487,229 +503,6 @@ sc_status sc_scene_get_stats(const sc_scene *s, sc_scene_stats *st)
     st->bytes = s->num_vertices * 3 * sizeof(float) +
                 s->num_triangles * (3 * sizeof(uint32_t) + sizeof(uint32_t));
     st->bytes_per_triangle = s->num_triangles ? (double)st->bytes / (double)s->num_triangles : 0;
-    sc_scene_bounds(s, 0, st->bounds_min, st->bounds_max);
+    sc_scene_bounds(s, st->bounds_min, st->bounds_max);
     return SC_OK;
-}
-
-sc_status sc_scene_mesh_cache_dir(const sc_scene_options *o, char *buf, size_t len)
-{
-    if (!buf || len == 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const char *dir = o ? o->mesh_cache_dir : NULL;
-    const char *env;
-    int n;
-    if (dir && *dir)
-        n = snprintf(buf, len, "%s", dir);
-    else if ((env = getenv("SPHERECULL_MESHES")) && *env)
-        n = snprintf(buf, len, "%s", env);
-    else if ((env = getenv("XDG_CACHE_HOME")) && *env)
-        n = snprintf(buf, len, "%s/spherecull/meshes", env);
-    else if ((env = getenv("HOME")) && *env)
-        n = snprintf(buf, len, "%s/.cache/spherecull/meshes", env);
-    else
-        return SC_ERR_IO;
-    return n >= 0 && (size_t)n < len ? SC_OK : SC_ERR_RANGE;
-}
-
-int sc_scene_parse_count(const char *text, uint64_t *out)
-{
-    if (!text || *text < '0' || *text > '9')
-        return 0;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(text, &end, 10);
-    if (errno)
-        return 0;
-    uint64_t mul = 1;
-    if (*end == 'k' || *end == 'K')
-        mul = 1000, end++;
-    else if (*end == 'M')
-        mul = 1000000, end++;
-    if (*end != '\0' || v == 0 || v > UINT64_MAX / mul)
-        return 0;
-    *out = v * mul;
-    return 1;
-}
-
-static int has_suffix_ci(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcasecmp(s + n - m, suffix) == 0;
-}
-
-static char *str_replace_all(const char *s, const char *what, const char *with)
-{
-    size_t lw = strlen(what), lr = strlen(with), count = 0;
-    for (const char *p = strstr(s, what); p; p = strstr(p + lw, what))
-        count++;
-    size_t len = strlen(s) + count * lr + 1;
-    char *out = malloc(len);
-    if (!out)
-        return NULL;
-    char *o = out;
-    const char *p = s, *q;
-    while ((q = strstr(p, what))) {
-        memcpy(o, p, (size_t)(q - p));
-        o += q - p;
-        memcpy(o, with, lr);
-        o += lr;
-        p = q + lw;
-    }
-    strcpy(o, p);
-    return out;
-}
-
-sc_status sc_scene_expand_path(sc_scene *s, const char *spec, const char *base_dir,
-                               char **out, char *err, size_t errlen)
-{
-    *out = NULL;
-    int is_cache = strncmp(spec, "cache:", 6) == 0;
-    char cache[4096];
-    if (is_cache || strstr(spec, "${SPHERECULL_MESHES}")) {
-        sc_scene_options o;
-        sc_scene_options_init(&o);
-        o.mesh_cache_dir = s->cache_dir;
-        sc_status st = sc_scene_mesh_cache_dir(&o, cache, sizeof cache);
-        if (st != SC_OK)
-            return sc_scene_errf(err, errlen, SC_ERR_IO,
-                                 "%s: cannot locate the mesh cache (set SPHERECULL_MESHES or HOME)", spec);
-    }
-    char *p;
-    if (is_cache) {
-        const char *name = spec + 6;
-        if (!*name)
-            return sc_scene_errf(err, errlen, SC_ERR_PARSE, "'cache:' needs a file name");
-        size_t len = strlen(cache) + strlen(name) + 2;
-        p = malloc(len);
-        if (p)
-            snprintf(p, len, "%s/%s", cache, name);
-    } else if (strstr(spec, "${SPHERECULL_MESHES}")) {
-        p = str_replace_all(spec, "${SPHERECULL_MESHES}", cache);
-    } else if (spec[0] != '/' && base_dir && *base_dir) {
-        size_t len = strlen(base_dir) + strlen(spec) + 2;
-        p = malloc(len);
-        if (p)
-            snprintf(p, len, "%s/%s", base_dir, spec);
-    } else {
-        p = strdup(spec);
-    }
-    if (!p)
-        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "out of memory");
-    *out = p;
-    return SC_OK;
-}
-
-sc_status sc_scene_append_spec(sc_scene *s, const char *spec, const double xform[16],
-                               const float *color, char *err, size_t errlen)
-{
-    if (strncmp(spec, "proc:", 5) == 0)
-        return sc_scene_load_procedural(s, spec, xform, color, err, errlen);
-    char *path;
-    sc_status st = sc_scene_expand_path(s, spec, NULL, &path, err, errlen);
-    if (st != SC_OK)
-        return st;
-    if (has_suffix_ci(path, ".json")) {
-        free(path);
-        return sc_scene_errf(err, errlen, SC_ERR_PARSE,
-                             "%s: a scene file cannot be used as a mesh", spec);
-    }
-    struct stat sb;
-    if (strncmp(spec, "cache:", 6) == 0 && stat(path, &sb) != 0) {
-        st = sc_scene_errf(err, errlen, SC_ERR_IO,
-                           "%s: %s not found (run scripts/fetch-meshes.sh to fill the mesh cache)",
-                           spec, path);
-        free(path);
-        return st;
-    }
-    st = sc_scene_load_assimp(s, path, xform, color, err, errlen);
-    free(path);
-    return st;
-}
-
-/* The common end of every load: a scene without triangles is an error,
- * mesh files get an automatic camera and light, warnings beyond the limit
- * are summarised. Frees s on failure. */
-static sc_status finish_load(sc_scene *s, sc_status st, const char *spec, int json,
-                             sc_scene **out, char *err, size_t errlen)
-{
-    if (st == SC_OK && s->num_triangles == 0)
-        st = sc_scene_errf(err, errlen, SC_ERR_PARSE, "%s: no triangles to render", spec);
-    if (st == SC_OK && !json) {
-        st = sc_scene_frame_camera(s, 35, 25, 40, SC_SCENE_DEFAULT_WIDTH, SC_SCENE_DEFAULT_HEIGHT);
-        if (st == SC_OK)
-            st = sc_scene_add_default_light(s);
-        if (st != SC_OK)
-            st = sc_scene_errf(err, errlen, st, "%s: cannot frame the camera on the model", spec);
-    }
-    if (st != SC_OK) {
-        sc_scene_free(s);
-        return st;
-    }
-    if (s->warnings > SC_SCENE_MAX_WARNINGS && s->warn) {
-        char buf[96];
-        snprintf(buf, sizeof buf, "%zu more warnings not shown",
-                 s->warnings - SC_SCENE_MAX_WARNINGS);
-        s->warn(s->warn_ctx, buf);
-    }
-    *out = s;
-    return SC_OK;
-}
-
-sc_status sc_scene_load(const char *spec, const sc_scene_options *options, sc_scene **out,
-                        char *err, size_t errlen)
-{
-    if (err && errlen)
-        err[0] = '\0';
-    if (!out)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
-    *out = NULL;
-    if (!spec || !*spec)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "empty scene name");
-    sc_scene *s;
-    sc_status st = sc_scene_create(options, &s);
-    if (st != SC_OK)
-        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
-
-    int json = strncmp(spec, "proc:", 5) != 0 && strncmp(spec, "cache:", 6) != 0 &&
-               has_suffix_ci(spec, ".json");
-    if (json)
-        st = sc_scene_load_json(s, spec, err, errlen);
-    else
-        st = sc_scene_append_spec(s, spec, NULL, NULL, err, errlen);
-    return finish_load(s, st, spec, json, out, err, errlen);
-}
-
-sc_status sc_scene_load_json_text(const char *text, size_t len, const char *name,
-                                  const char *base_dir, const sc_scene_options *options,
-                                  sc_scene **out, char *err, size_t errlen)
-{
-    if (err && errlen)
-        err[0] = '\0';
-    if (!out)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL output pointer");
-    *out = NULL;
-    if (!text && len > 0)
-        return sc_scene_errf(err, errlen, SC_ERR_INVALID_ARGUMENT, "NULL scene text");
-    if (!name || !*name)
-        name = "<memory>";
-    if (!base_dir || !*base_dir)
-        base_dir = ".";
-    if (len >= SIZE_MAX)
-        return sc_scene_errf(err, errlen, SC_ERR_LIMIT, "%s: scene text too large", name);
-    /* cJSON wants the terminating NUL inside the buffer it is given. */
-    char *buf = malloc(len + 1);
-    if (!buf)
-        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", name);
-    if (len)
-        memcpy(buf, text, len);
-    buf[len] = '\0';
-    sc_scene *s;
-    sc_status st = sc_scene_create(options, &s);
-    if (st != SC_OK) {
-        free(buf);
-        return sc_scene_errf(err, errlen, st, "%s", sc_strerror(st));
-    }
-    st = sc_scene_load_json_buffer(s, name, base_dir, buf, len, err, errlen);
-    free(buf);
-    return finish_load(s, st, name, 1, out, err, errlen);
 }
