@@ -26,12 +26,12 @@
 #include <string.h>
 #include <sys/ioctl.h>
 #include <sys/syscall.h>
-#include <time.h>
 #include <unistd.h>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 
+#include "common/sc_clock.h"
 #include "commands.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_rays.h"
@@ -71,13 +71,6 @@ static void usage(FILE *f)
 }
 
 /* ---- small helpers -------------------------------------------------------- */
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -495,24 +488,24 @@ static int bench_scene(const char *spec, const bench_opts *o, csvbuf *csv)
 #ifdef SC_HAVE_EMBREE
                         if (r % 2 == 0) {
                             c0 = cycles_read(o->cycles_fd);
-                            double t0 = now_s();
+                            double t0 = sc_now_seconds();
                             embree_run(emb, kind, rs->rays, n, &out, thr);
-                            te = now_s() - t0;
+                            te = sc_now_seconds() - t0;
                             ce = cycles_read(o->cycles_fd) - c0;
                         }
 #endif
                         c0 = cycles_read(o->cycles_fd);
-                        double t0 = now_s();
+                        double t0 = sc_now_seconds();
                         ours_run(b, kind, rs->rays, n, &out, thr);
-                        to = now_s() - t0;
+                        to = sc_now_seconds() - t0;
                         c1 = cycles_read(o->cycles_fd);
                         co = c1 - c0;
 #ifdef SC_HAVE_EMBREE
                         if (r % 2 == 1) {
                             c0 = cycles_read(o->cycles_fd);
-                            double t1 = now_s();
+                            double t1 = sc_now_seconds();
                             embree_run(emb, kind, rs->rays, n, &out, thr);
-                            te = now_s() - t1;
+                            te = sc_now_seconds() - t1;
                             ce = cycles_read(o->cycles_fd) - c0;
                         }
 #endif

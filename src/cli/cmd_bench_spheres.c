@@ -8,9 +8,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
+#include "common/sc_clock.h"
 #include "commands.h"
 #include "common/sc_rng.h"
 #include "sc_families.h"
@@ -32,13 +32,6 @@ typedef struct bench {
     size_t n, cap;
     int quick;
 } bench;
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -85,11 +78,11 @@ static double time_job(const job *j, int reps, double min_time)
     run_job(j);                                     /* warm caches and pages */
     for (int r = 0; r < reps; r++) {
         int calls = 0;
-        double t0 = now(), el;
+        double t0 = sc_now_seconds(), el;
         do {
             run_job(j);
             calls++;
-            el = now() - t0;
+            el = sc_now_seconds() - t0;
         } while (el < min_time);
         best = fmin(best, el / calls);
     }
@@ -103,11 +96,11 @@ static void time_pair(const job *kernel, const job *copy, int reps, double *tk, 
     *tk = *tc = INFINITY;
     run_job(kernel);
     for (int r = 0; r < reps; r++) {
-        double t0 = now();
+        double t0 = sc_now_seconds();
         run_job(copy);
-        double t1 = now();
+        double t1 = sc_now_seconds();
         run_job(kernel);
-        double t2 = now();
+        double t2 = sc_now_seconds();
         *tc = fmin(*tc, t1 - t0), *tk = fmin(*tk, t2 - t1);
     }
 }
@@ -119,7 +112,7 @@ static double time_indexed_copy(const float *verts, const uint32_t *idx, float *
 {
     double best = INFINITY;
     for (int r = 0; r < reps; r++) {
-        double t0 = now();
+        double t0 = sc_now_seconds();
         for (size_t t = 0; t < n; t++) {
             if (t + SC_PREFETCH_AHEAD < n)
                 for (int k = 0; k < 3; k++)
@@ -130,7 +123,7 @@ static double time_indexed_copy(const float *verts, const uint32_t *idx, float *
                     dst[(size_t)(3 * k + a) * n + t] = p[a];
             }
         }
-        best = fmin(best, now() - t0);
+        best = fmin(best, sc_now_seconds() - t0);
     }
     return best;
 }
@@ -344,7 +337,7 @@ static double time_reject(const sc_kernels *k, int width, int packet, int quick)
     for (int r = 0; r < reps; r++) {
         uint32_t acc = 0;
         long calls = 0;
-        double t0 = now(), el;
+        double t0 = sc_now_seconds(), el;
         do {
             for (int b = 0; b < NB; b++) {
                 if (packet)
@@ -358,7 +351,7 @@ static double time_reject(const sc_kernels *k, int width, int packet, int quick)
                     acc += k->reject16(&ray, &blk[b]);
             }
             calls += NB;
-            el = now() - t0;
+            el = sc_now_seconds() - t0;
         } while (el < (quick ? 0.005 : 0.02));
         sink += acc;
         t[r] = el / (double)calls * 1e9;

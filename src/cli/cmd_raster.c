@@ -14,8 +14,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 
+#include "common/sc_clock.h"
 #include "commands.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_image.h"
@@ -46,13 +46,6 @@ int sc_cmd_raster_check(int argc, char **argv)
     return no_osmesa(argv[0]);
 }
 #else
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* Options both commands share. */
 typedef struct common_args {
@@ -239,9 +232,9 @@ static void unload(loaded *L)
 
 static int render(const char *cmd, loaded *L, sc_raster_image *img, double *seconds)
 {
-    double t0 = now_seconds();
+    double t0 = sc_now_seconds();
     sc_status st = sc_raster_render(&L->mesh, &L->cam, &L->opt, img);
-    *seconds = now_seconds() - t0;
+    *seconds = sc_now_seconds() - t0;
     if (st != SC_OK) {
         sc_cli_error(cmd, "raster: %s", img->error[0] ? img->error : sc_strerror(st));
         return 0;
@@ -714,14 +707,14 @@ int sc_cmd_raster_check(int argc, char **argv)
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     cfg.prefilter = prefilter;
-    double t0 = now_seconds();
+    double t0 = sc_now_seconds();
     st = sc_bvh_build(L.mesh.positions, L.mesh.vertex_count, L.mesh.indices, L.mesh.triangle_count,
                       &cfg, &bvh);
     if (st != SC_OK) {
         sc_cli_error(cmd, "BVH build: %s", sc_strerror(st));
         goto done;
     }
-    double build_secs = now_seconds() - t0;
+    double build_secs = sc_now_seconds() - t0;
     tr[0].name = "ours";
     tr[0].ids = malloc(npix * sizeof *tr[0].ids);
     tests = overlay ? calloc(npix, sizeof *tests) : NULL;
@@ -731,7 +724,7 @@ int sc_cmd_raster_check(int argc, char **argv)
     }
     ntr = 1;
     sc_trace_stats total = { 0 };
-    t0 = now_seconds();
+    t0 = sc_now_seconds();
     for (size_t i = 0; i < rays.count; i++) {
         sc_hitrec hit;
         sc_trace_stats s = { 0 };
@@ -750,7 +743,7 @@ int sc_cmd_raster_check(int argc, char **argv)
             total.tri_hits += s.tri_hits;
         }
     }
-    tr[0].seconds = now_seconds() - t0;
+    tr[0].seconds = sc_now_seconds() - t0;
 
 #ifdef SC_HAVE_EMBREE
     if (use_embree) {
@@ -770,9 +763,9 @@ int sc_cmd_raster_check(int argc, char **argv)
         }
         st = sc_embree_create(&mv, &ecfg, &e);
         if (st == SC_OK) {
-            t0 = now_seconds();
+            t0 = sc_now_seconds();
             st = sc_embree_intersect1(e, rays.rays, rays.count, hits, NULL);
-            tr[1].seconds = now_seconds() - t0;
+            tr[1].seconds = sc_now_seconds() - t0;
         }
         sc_embree_destroy(e);
         if (st != SC_OK) {

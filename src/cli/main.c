@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "common/sc_atomic_file.h"
 
 /* One row per subcommand; each subsystem adds its own. */
 static const sc_command commands[] = {
@@ -65,40 +66,7 @@ int sc_cli_check_output(const char *command, const char *option, const char *pat
 
 int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
 {
-    /* Never rename over a device, pipe or directory (-o /dev/null would
-     * replace the device node): refuse any existing non-regular target. */
-    struct stat st;
-    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        errno = S_ISDIR(st.st_mode) ? EISDIR : EINVAL;
-        return -1;
-    }
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 16);
-    if (!tmp)
-        return -1;
-    snprintf(tmp, len + 16, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        free(tmp);
-        return -1;
-    }
-    FILE *f = fdopen(fd, "wb");
-    int ok = f && write_fn(ctx, f) == 0;
-    if (f) {
-        ok = ok && fflush(f) == 0 && !ferror(f);
-        ok = (fclose(f) == 0) && ok;
-    } else {
-        close(fd);
-    }
-    if (ok)
-        ok = rename(tmp, path) == 0;
-    if (!ok) {
-        int saved = errno;
-        unlink(tmp);
-        errno = saved;
-    }
-    free(tmp);
-    return ok ? 0 : -1;
+    return sc_write_atomic(path, write_fn, ctx);
 }
 
 static void usage(FILE *out)

@@ -5,10 +5,11 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include <cjson/cJSON.h>
 
+#include "common/sc_clock.h"
+#include "common/sc_csv.h"
 #include "compare.h"
 #include "crossing.h"
 #include "oracle.h"
@@ -241,13 +242,6 @@ static void *pool_worker(void *arg)
     return NULL;
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static sc_status timed_run(const tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
                            int threads, double *seconds)
 {
@@ -257,14 +251,14 @@ static sc_status timed_run(const tracer *t, const sc_ray *rays, size_t n, sc_hit
     atomic_init(&j.failed, 0);
     pthread_t tid[SC_CMP_MAX_THREADS];
     int started[SC_CMP_MAX_THREADS] = { 0 };
-    double t0 = now_s();
+    double t0 = sc_now_seconds();
     for (int k = 1; k < threads; k++)
         started[k] = pthread_create(&tid[k], NULL, pool_worker, &j) == 0;
     pool_worker(&j);
     for (int k = 1; k < threads; k++)
         if (started[k])
             pthread_join(tid[k], NULL);
-    *seconds = now_s() - t0;
+    *seconds = sc_now_seconds() - t0;
     return atomic_load(&j.failed) ? SC_ERR_INVALID_ARGUMENT : SC_OK;
 }
 
@@ -402,13 +396,13 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
     for (int d = 0; d < NDEFS; d++) {
         if (!wanted(opt, all_tracers[d].name))
             continue;
-        double t0 = now_s();
+        double t0 = sc_now_seconds();
         st = tracer_build(&tr[ntr], &all_tracers[d], mesh);
         if (st != SC_OK) {
             if (log) fprintf(log, "  %s: build failed: %s (skipped)\n", all_tracers[d].name, sc_strerror(st));
             continue;
         }
-        if (log) fprintf(log, "  built %-24s %6.2f s  %.0f B/tri\n", all_tracers[d].name, now_s() - t0,
+        if (log) fprintf(log, "  built %-24s %6.2f s  %.0f B/tri\n", all_tracers[d].name, sc_now_seconds() - t0,
                          tr[ntr].bytes_per_tri);
         ntr++;
     }
@@ -497,7 +491,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
             srays[s] = set->rays[sample[s]];
         }
         sc_oracle orc;
-        double t0 = now_s();
+        double t0 = sc_now_seconds();
         st = sc_oracle_run(mesh, srays, ns, opt->oracle_threads,
                            k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
         if (st != SC_OK) {
@@ -509,7 +503,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
             ohits += (size_t)orc.hits[s].hit;
         if (log)
             fprintf(log, "  %-11s %7zu rays; oracle %zu rays (%zu hit) %.1f s, %.1f exact calls/ray\n",
-                    sc_rayset_kind_name((sc_rayset_kind)k), set->count, ns, ohits, now_s() - t0,
+                    sc_rayset_kind_name((sc_rayset_kind)k), set->count, ns, ohits, sc_now_seconds() - t0,
                     ns ? (double)orc.exact_calls / (double)ns : 0);
         int shadow = k == SC_RAYS_SHADOW;
         for (int ti = 0; ti < ntr; ti++) {
@@ -619,8 +613,11 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
         snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
         snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
-        fprintf(f, "%s,%u,%s,%s,%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
-                r->scene, r->triangles, sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s,
+        sc_csv_str(f, r->scene);
+        fprintf(f, ",%u,%s,", r->triangles, sc_rayset_kind_name(r->rays));
+        sc_csv_str(f, r->tracer);
+        fprintf(f, ",%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
+                r->threads, r->mrays_per_s,
                 r->oracle_rays, r->hit_miss_disagree, r->primid_disagree, a, r->holes, b, c, d, e,
                 r->bytes_per_tri, r->nrays, r->closed, g, r->hole_rays, h, r->grazes_missed, r->graze_rays);
     }
