@@ -67,3 +67,20 @@ int sc_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void 
     free(tmp);
     return ok ? 0 : -1;
 }
+
+typedef struct bytes {
+    const void *data;
+    size_t len;
+} bytes;
+
+static int write_bytes(void *ctx, FILE *f)
+{
+    const bytes *b = ctx;
+    return b->len && fwrite(b->data, 1, b->len, f) != b->len ? -1 : 0;
+}
+
+int sc_write_atomic_bytes(const char *path, const void *data, size_t len)
+{
+    bytes b = { data, len };
+    return sc_write_atomic(path, write_bytes, &b);
+}

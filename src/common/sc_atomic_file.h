@@ -6,6 +6,7 @@
 #ifndef SPHERECULL_COMMON_SC_ATOMIC_FILE_H
 #define SPHERECULL_COMMON_SC_ATOMIC_FILE_H
 
+#include <stddef.h>
 #include <stdio.h>
 
 /* write_fn writes the whole content to f and returns 0, or non-zero on
@@ -13,5 +14,8 @@
  * exists and is not a regular file: a rename would replace a directory,
  * device or FIFO, so that is refused). */
 int sc_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx);
+
+/* The same for LEN bytes already in memory. */
+int sc_write_atomic_bytes(const char *path, const void *data, size_t len);
 
 #endif
