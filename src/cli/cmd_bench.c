@@ -15,6 +15,7 @@
 #include "compare/bench.h"
 #include "spherecull/sc_scene.h"
 #include "spherecull/sc_trace.h"
+#include "x86/cpu_features.h"
 #ifdef SC_HAVE_EMBREE
 #include <embree3/rtcore_config.h>
 #endif
@@ -228,31 +229,11 @@ static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_f
     return 0;
 }
 
-static void cpu_name(char *buf, size_t len)
-{
-    snprintf(buf, len, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f))
-        if (strncmp(line, "model name", 10) == 0) {
-            char *c = strchr(line, ':');
-            if (c) {
-                c += 1 + strspn(c + 1, " \t");
-                c[strcspn(c, "\n")] = 0;
-                snprintf(buf, len, "%s", c);
-            }
-            break;
-        }
-    fclose(f);
-}
-
 /* What the benchmark runs on, before any number. */
 static void print_machine(const sc_bench_options *o, int cycles_fd)
 {
-    char cpu[256];
-    cpu_name(cpu, sizeof cpu);
+    char cpu[64];
+    sc_x86_brand(cpu);
     sc_trace_isa isa = o->isa;
     if (isa == SC_TRACE_ISA_AUTO) {
         /* What a build with AUTO picks (SPHERECULL_ISA, then the CPU). */
