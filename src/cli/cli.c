@@ -10,6 +10,8 @@
 
 #include "cli.h"
 #include "common/sc_atomic_file.h"
+#include "spherecull/sc_rays.h"
+#include "spherecull/sc_scene.h"
 
 enum { MAX_OPTS = 48, OPT_BASE = 256, HELP_COLUMN = 26 };
 
@@ -190,4 +192,23 @@ int sc_cli_int_list(const char *cmd, const char *opt, const char *s, int lo, int
     }
     sc_cli_error(cmd, "--%s wants a comma list of at most %d numbers in %d..%d, not '%s'", opt, max, lo, hi, s);
     return -1;
+}
+
+int sc_cli_load_mesh(const char *cmd, const char *spec, sc_scene **scene, sc_scene_view *v, sc_mesh_view *mesh)
+{
+    char err[512] = "";
+    sc_status st = sc_scene_load(spec, NULL, scene, err, sizeof err);
+    if (st != SC_OK) {
+        sc_cli_error(cmd, "%s", err[0] ? err : sc_strerror(st));
+        return 1;
+    }
+    sc_scene_get_view(*scene, v);
+    if (v->num_triangles == 0 || v->num_triangles > UINT32_MAX || v->num_vertices > UINT32_MAX) {
+        sc_cli_error(cmd, "%s: %zu triangles: nothing to trace, or too many", spec, v->num_triangles);
+        sc_scene_free(*scene);
+        *scene = NULL;
+        return 1;
+    }
+    *mesh = (sc_mesh_view){ v->positions, (uint32_t)v->num_vertices, v->indices, (uint32_t)v->num_triangles };
+    return 0;
 }

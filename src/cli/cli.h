@@ -58,6 +58,15 @@ int sc_cli_check_output(const char *command, const char *option, const char *pat
  * error line and returns -1. */
 int sc_cli_write(const char *command, const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx);
 
+/* Loads SPEC for the tracers: the scene, its view, and a mesh view of at
+ * least one triangle with 32-bit counts. 0, or 1 after an error line (the
+ * scene is then freed). */
+struct sc_scene;
+struct sc_scene_view;
+struct sc_mesh_view;
+int sc_cli_load_mesh(const char *cmd, const char *spec, struct sc_scene **scene, struct sc_scene_view *v,
+                     struct sc_mesh_view *mesh);
+
 /* Value parsers: 0 on success, else an error line naming OPT and -1. */
 int sc_cli_int(const char *cmd, const char *opt, const char *s, long lo, long hi, long *out);
 int sc_cli_u64(const char *cmd, const char *opt, const char *s, unsigned long long *out);

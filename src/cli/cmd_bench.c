@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "common/sc_atomic_file.h"
 #include "common/sc_csv.h"
 #include "common/sc_names.h"
 #include "compare/bench.h"
@@ -197,26 +198,15 @@ static void print_row(void *ctx, const sc_bench_row *r)
 
 static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_fd, FILE *csv)
 {
-    sc_scene_options so;
-    sc_scene_options_init(&so);
-    sc_scene *scene = NULL;
-    char err[512] = "";
-    sc_status st = sc_scene_load(spec, &so, &scene, err, sizeof err);
-    if (st != SC_OK) {
-        sc_cli_error(CMD, "%s", err[0] ? err : sc_strerror(st));
-        return 1;
-    }
+    sc_scene *scene;
     sc_scene_view v;
-    sc_scene_get_view(scene, &v);
-    if (v.num_triangles == 0 || v.num_triangles > UINT32_MAX || v.num_vertices > UINT32_MAX) {
-        sc_cli_error(CMD, "%s: no triangles to trace", spec);
-        sc_scene_free(scene);
+    sc_mesh_view mesh;
+    if (sc_cli_load_mesh(CMD, spec, &scene, &v, &mesh) != 0)
         return 1;
-    }
-    sc_mesh_view mesh = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
+    char err[512] = "";
     printer p = { spec, o, csv, { 0 } };
     sc_bench_sink sink = { print_scene, print_row, &p };
-    st = sc_bench_run(&mesh, &v.camera, v.lights, v.num_lights, o, cycles_fd, &sink, err, sizeof err);
+    sc_status st = sc_bench_run(&mesh, &v.camera, v.lights, v.num_lights, o, cycles_fd, &sink, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {
         sc_cli_error(CMD, "%s: %s", spec, err[0] ? err : sc_strerror(st));
@@ -269,17 +259,6 @@ static void print_machine(const sc_bench_options *o, int cycles_fd)
     fflush(stdout);
 }
 
-typedef struct membuf {
-    char *s;
-    size_t len;
-} membuf;
-
-static int write_buf(void *ctx, FILE *f)
-{
-    const membuf *m = ctx;
-    return m->len && fwrite(m->s, 1, m->len, f) != m->len ? -1 : 0;
-}
-
 static int run(int argc, char **argv)
 {
     args a;
@@ -296,8 +275,9 @@ static int run(int argc, char **argv)
         return 1;
     int cycles_fd = sc_bench_cycles_open();
     print_machine(&a.o, cycles_fd);
-    membuf m = { NULL, 0 };
-    FILE *csv = open_memstream(&m.s, &m.len);
+    char *text = NULL;
+    size_t len = 0;
+    FILE *csv = open_memstream(&text, &len);
     if (!csv) {
         sc_cli_error(CMD, "out of memory");
         rc = 1;
@@ -315,9 +295,11 @@ static int run(int argc, char **argv)
     }
     if (cycles_fd >= 0)
         close(cycles_fd);
-    if (rc == 0 && a.csv && sc_cli_write(CMD, a.csv, write_buf, &m) != 0)
+    if (rc == 0 && a.csv && sc_write_atomic_bytes(a.csv, text, len) != 0) {
+        sc_cli_error(CMD, "cannot write %s: %s", a.csv, strerror(errno));
         rc = 1;
-    free(m.s);
+    }
+    free(text);
     return rc;
 }
 

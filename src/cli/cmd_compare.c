@@ -152,28 +152,19 @@ static int write_json_cb(void *ctx, FILE *f)
 
 static int compare_scene(const char *spec, const sc_cmp_options *opt, sc_cmp_rows *rows)
 {
-    char err[512] = "";
-    sc_scene *scene = NULL;
-    sc_status st = sc_scene_load(spec, NULL, &scene, err, sizeof err);
-    if (st != SC_OK) {
-        sc_cli_error(CMD, "%s", err[0] ? err : sc_strerror(st));
-        return 1;
-    }
+    sc_scene *scene;
     sc_scene_view v;
-    sc_scene_get_view(scene, &v);
-    if (v.num_triangles == 0 || v.num_triangles > UINT32_MAX || v.num_vertices > UINT32_MAX) {
-        sc_cli_error(CMD, "%s: %zu triangles: nothing to compare, or too many", spec, v.num_triangles);
-        sc_scene_free(scene);
+    sc_mesh_view mesh;
+    if (sc_cli_load_mesh(CMD, spec, &scene, &v, &mesh) != 0)
         return 1;
-    }
-    sc_mesh_view mesh = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
+    char err[512] = "";
     float lo[3], hi[3], light[3];
     sc_mesh_bounds(&mesh, lo, hi);
     sc_light_point(v.lights, v.num_lights, lo, hi, light);
     const char *base = strrchr(spec, '/');
     base = base ? base + 1 : spec;
     fprintf(stderr, "%s: %zu triangles\n", base, v.num_triangles);
-    st = sc_cmp_scene(base, &mesh, &v.camera, light, opt, rows, stderr, err, sizeof err);
+    sc_status st = sc_cmp_scene(base, &mesh, &v.camera, light, opt, rows, stderr, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {
         sc_cli_error(CMD, "%s", err[0] ? err : sc_strerror(st));

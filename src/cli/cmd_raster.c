@@ -7,15 +7,9 @@
 
 #include "cli.h"
 #include "common/sc_names.h"
-#ifdef SC_HAVE_OSMESA
 #include "raster_images.h"
-#endif
 
 #define CMD "raster"
-
-#ifndef SC_HAVE_OSMESA
-#define SC_RASTER_COMMON_OPTS { "width", 0, "W", "image width", NULL }
-#endif
 
 enum { O_OUT = 0, O_IDS, O_DEPTH };
 static const sc_cli_opt opts[] = {
@@ -25,14 +19,6 @@ static const sc_cli_opt opts[] = {
     SC_RASTER_COMMON_OPTS,
 };
 
-#ifndef SC_HAVE_OSMESA
-static int run(int argc, char **argv)
-{
-    (void)argc, (void)argv;
-    sc_cli_error(CMD, "this build has no OSMesa raster reference (configure with libosmesa6-dev)");
-    return 1;
-}
-#else
 
 typedef struct args {
     raster_args r;
@@ -49,6 +35,48 @@ static int on_option(void *ctx, int opt, const char *val)
     return raster_common_option(CMD, opt < 0 ? -1 : opt - 3, val, &a->r);
 }
 
+#ifdef SC_HAVE_OSMESA
+static int rasterize(const args *a)
+{
+    int rc = 1;
+    loaded L;
+    sc_raster_image img = { 0 };
+    double secs = 0, tmin = 0, tmax = 0;
+    if (!raster_load(CMD, &a->r, &L) || !raster_render(CMD, &L, &img, &secs))
+        goto done;
+    sc_image prev = { img.width, img.height, img.rgb };
+    if (!raster_write_png(CMD, a->out, &prev) ||
+        (a->ids && !raster_write_ids(CMD, a->ids, &img, L.mesh.triangle_count)) ||
+        (a->depth && !raster_write_depth(CMD, a->depth, &img, &tmin, &tmax)))
+        goto done;
+    size_t covered = 0;
+    for (size_t p = 0; p < (size_t)img.width * (size_t)img.height; p++)
+        covered += img.ids[p] != 0;
+    printf("scene      %s: %zu triangles, %zu vertices\n", a->r.scene, L.mesh.triangle_count, L.mesh.vertex_count);
+    printf("image      %dx%d, %.2f%% covered, raster %.3f s\n", img.width, img.height,
+           100.0 * (double)covered / ((double)img.width * img.height), secs);
+    printf("depth      %s (%d bits), near %.6g, far %.6g\n", raster_depth_mode_name(img.depth_mode), img.depth_bits,
+           img.near_dist, img.far_dist);
+    printf("wrote      %s", a->out);
+    if (a->ids)
+        printf(", %s", a->ids);
+    if (a->depth)
+        printf(", %s (t from %.6g bright to %.6g dark)", a->depth, tmin, tmax);
+    printf("\n");
+    rc = 0;
+done:
+    sc_raster_image_free(&img);
+    raster_unload(&L);
+    return rc;
+}
+#else
+static int rasterize(const args *a)
+{
+    (void)a;
+    return raster_unavailable(CMD);
+}
+#endif
+
 static int run(int argc, char **argv)
 {
     args a;
@@ -63,38 +91,8 @@ static int run(int argc, char **argv)
     if (sc_cli_check_output(CMD, "-o", a.out) != 0 || sc_cli_check_output(CMD, "--ids", a.ids) != 0 ||
         sc_cli_check_output(CMD, "--depth", a.depth) != 0)
         return 1;
-    loaded L;
-    sc_raster_image img = { 0 };
-    rc = 1;
-    double secs = 0, tmin = 0, tmax = 0;
-    if (!raster_load(CMD, &a.r, &L) || !raster_render(CMD, &L, &img, &secs))
-        goto done;
-    sc_image prev = { img.width, img.height, img.rgb };
-    if (!raster_write_png(CMD, a.out, &prev) ||
-        (a.ids && !raster_write_ids(CMD, a.ids, &img, L.mesh.triangle_count)) ||
-        (a.depth && !raster_write_depth(CMD, a.depth, &img, &tmin, &tmax)))
-        goto done;
-    size_t covered = 0;
-    for (size_t p = 0; p < (size_t)img.width * (size_t)img.height; p++)
-        covered += img.ids[p] != 0;
-    printf("scene      %s: %zu triangles, %zu vertices\n", a.r.scene, L.mesh.triangle_count, L.mesh.vertex_count);
-    printf("image      %dx%d, %.2f%% covered, raster %.3f s\n", img.width, img.height,
-           100.0 * (double)covered / ((double)img.width * img.height), secs);
-    printf("depth      %s (%d bits), near %.6g, far %.6g\n", raster_depth_mode_name(img.depth_mode), img.depth_bits,
-           img.near_dist, img.far_dist);
-    printf("wrote      %s", a.out);
-    if (a.ids)
-        printf(", %s", a.ids);
-    if (a.depth)
-        printf(", %s (t from %.6g bright to %.6g dark)", a.depth, tmin, tmax);
-    printf("\n");
-    rc = 0;
-done:
-    sc_raster_image_free(&img);
-    raster_unload(&L);
-    return rc;
+    return rasterize(&a);
 }
-#endif
 
 const sc_cli_cmd sc_cli_raster = {
     .name = "raster",

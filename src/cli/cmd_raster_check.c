@@ -11,16 +11,13 @@
 #include "cli.h"
 #include "common/sc_csv.h"
 #include "common/sc_names.h"
+#include "raster_images.h"
+#include "spherecull/sc_bvh.h"
 #ifdef SC_HAVE_OSMESA
 #include "compare/raster_check.h"
-#include "raster_images.h"
 #endif
 
 #define CMD "raster-check"
-
-#ifndef SC_HAVE_OSMESA
-#define SC_RASTER_COMMON_OPTS { "width", 0, "W", "image width", NULL }
-#endif
 
 enum { O_CSV = 0, O_PIXELS, O_MAP, O_OVERLAY, O_PREFILTER, O_NO_EMBREE, NOWN };
 static const sc_cli_opt opts[] = {
@@ -33,14 +30,6 @@ static const sc_cli_opt opts[] = {
     SC_RASTER_COMMON_OPTS,
 };
 
-#ifndef SC_HAVE_OSMESA
-static int run(int argc, char **argv)
-{
-    (void)argc, (void)argv;
-    sc_cli_error(CMD, "this build has no OSMesa raster reference (configure with libosmesa6-dev)");
-    return 1;
-}
-#else
 
 typedef struct args {
     raster_args r;
@@ -68,6 +57,7 @@ static int on_option(void *ctx, int opt, const char *val)
     return raster_common_option(CMD, opt < 0 ? -1 : opt - NOWN, val, &a->r);
 }
 
+#ifdef SC_HAVE_OSMESA
 typedef struct report {
     const char *scene;
     const sc_raster_image *img;
@@ -176,6 +166,46 @@ static int write_outputs(const args *a, const sc_raster_image *img, const sc_rch
     return 1;
 }
 
+static int check(const args *a)
+{
+    int rc = 1;
+    loaded L;
+    sc_raster_image img = { 0 };
+    sc_rcheck c;
+    memset(&c, 0, sizeof c);
+    double raster_s = 0;
+    char err[256] = "";
+    if (!raster_load(CMD, &a->r, &L) || !raster_render(CMD, &L, &img, &raster_s))
+        goto done;
+    if (sc_rcheck_run(&L.mesh, &L.cam, &img, a->prefilter, !a->no_embree, a->overlay != NULL, &c, err, sizeof err) !=
+        SC_OK) {
+        sc_cli_error(CMD, "%s", err);
+        goto done;
+    }
+    print_summary(a, &img, &c, L.mesh.triangle_count, raster_s);
+    if (!write_outputs(a, &img, &c, &L))
+        goto done;
+    size_t npix = (size_t)img.width * (size_t)img.height;
+    if (!sc_rcheck_target_met(&c, npix)) {
+        sc_cli_error(CMD, "ours misses the target: %.4f%% agreement (>= 99.5%%), %zu elsewhere (0)",
+                     100.0 * (double)c.tr[0].agree / (double)npix, c.tr[0].kinds[SC_RASTER_DIFF_ELSEWHERE]);
+        goto done;
+    }
+    rc = 0;
+done:
+    sc_rcheck_free(&c);
+    sc_raster_image_free(&img);
+    raster_unload(&L);
+    return rc;
+}
+#else
+static int check(const args *a)
+{
+    (void)a;
+    return raster_unavailable(CMD);
+}
+#endif
+
 static int run(int argc, char **argv)
 {
     args a;
@@ -191,37 +221,8 @@ static int run(int argc, char **argv)
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0 || sc_cli_check_output(CMD, "--pixels", a.pixels) != 0 ||
         sc_cli_check_output(CMD, "--map", a.map) != 0 || sc_cli_check_output(CMD, "--overlay", a.overlay) != 0)
         return 1;
-    loaded L;
-    sc_raster_image img = { 0 };
-    sc_rcheck c;
-    memset(&c, 0, sizeof c);
-    rc = 1;
-    double raster_s = 0;
-    char err[256] = "";
-    if (!raster_load(CMD, &a.r, &L) || !raster_render(CMD, &L, &img, &raster_s))
-        goto done;
-    if (sc_rcheck_run(&L.mesh, &L.cam, &img, a.prefilter, !a.no_embree, a.overlay != NULL, &c, err, sizeof err) !=
-        SC_OK) {
-        sc_cli_error(CMD, "%s", err);
-        goto done;
-    }
-    print_summary(&a, &img, &c, L.mesh.triangle_count, raster_s);
-    if (!write_outputs(&a, &img, &c, &L))
-        goto done;
-    size_t npix = (size_t)img.width * (size_t)img.height;
-    if (!sc_rcheck_target_met(&c, npix)) {
-        sc_cli_error(CMD, "ours misses the target: %.4f%% agreement (>= 99.5%%), %zu elsewhere (0)",
-                     100.0 * (double)c.tr[0].agree / (double)npix, c.tr[0].kinds[SC_RASTER_DIFF_ELSEWHERE]);
-        goto done;
-    }
-    rc = 0;
-done:
-    sc_rcheck_free(&c);
-    sc_raster_image_free(&img);
-    raster_unload(&L);
-    return rc;
+    return check(&a);
 }
-#endif
 
 const sc_cli_cmd sc_cli_raster_check = {
     .name = "raster-check",

@@ -11,6 +11,12 @@
 #include "common/sc_names.h"
 #include "raster_images.h"
 
+int raster_unavailable(const char *cmd)
+{
+    sc_cli_error(cmd, "this build has no OSMesa raster reference (configure with libosmesa6-dev)");
+    return 1;
+}
+
 static const sc_name depth_modes[] = {
     { "auto", SC_RASTER_DEPTH_AUTO },
     { "float", SC_RASTER_DEPTH_FLOAT_REVERSED },
@@ -75,6 +81,7 @@ int raster_common_option(const char *cmd, int which, const char *val, raster_arg
     return 0;
 }
 
+#ifdef SC_HAVE_OSMESA
 const char *raster_depth_mode_name(sc_raster_depth_mode m)
 {
     return m == SC_RASTER_DEPTH_FLOAT_REVERSED ? "float32 reversed-Z"
@@ -341,3 +348,4 @@ int raster_write_overlay(const char *cmd, const char *path, const sc_raster_imag
     *max_out = mx;
     return ok;
 }
+#endif

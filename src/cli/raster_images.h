@@ -8,6 +8,10 @@
 #include "spherecull/sc_raster.h"
 #include "spherecull/sc_scene.h"
 
+/* Without the raster reference both commands parse their options, then
+ * only say so: one error line, exit status 1. */
+int raster_unavailable(const char *cmd);
+
 /* The options both commands take, first in their option tables. */
 #define SC_RASTER_COMMON_OPTS                                                               \
     { "width", 0, "W", "image width", "the scene's" },                                      \

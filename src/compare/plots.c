@@ -53,6 +53,18 @@ static int text_close(text *t)
     return fclose(t->f) == 0 && t->s ? 0 : -1;
 }
 
+/* A data file and its script, both in memory until written. */
+static int texts_open(text *d, text *g)
+{
+    if (text_open(d) != 0)
+        return -1;
+    if (text_open(g) != 0) {
+        text_close(d), free(d->s);
+        return -1;
+    }
+    return 0;
+}
+
 /* Mrays/s per scene per tracer for one ray set, at thread count thr. */
 static int speed_plot(const sc_cmp_rows *rows, const char *dir, int k, int thr, const char **scenes, int ns,
                       const char **tracers, int nt)
@@ -70,12 +82,8 @@ static int speed_plot(const sc_cmp_rows *rows, const char *dir, int k, int thr, 
                 break;
             }
     text d, g;
-    if (text_open(&d) != 0)
+    if (texts_open(&d, &g) != 0)
         return -1;
-    if (text_open(&g) != 0) {
-        text_close(&d), free(d.s);
-        return -1;
-    }
     fprintf(d.f, "scene");
     for (int t = 0; t < nc; t++)
         fprintf(d.f, " \"%s\"", cols[t]);
@@ -118,12 +126,8 @@ static int speed_plot(const sc_cmp_rows *rows, const char *dir, int k, int thr, 
 static int error_plot(const sc_cmp_rows *rows, const char *dir, int thr, const char **tracers, int nt)
 {
     text d, g;
-    if (text_open(&d) != 0)
+    if (texts_open(&d, &g) != 0)
         return -1;
-    if (text_open(&g) != 0) {
-        text_close(&d), free(d.s);
-        return -1;
-    }
     for (int t = 0; t < nt; t++) {
         fprintf(d.f, "# %s\n", tracers[t]);
         for (size_t i = 0; i < rows->count; i++) {
