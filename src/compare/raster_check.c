@@ -30,8 +30,7 @@ static sc_status trace(const sc_tracer *t, const sc_rayset *rays, sc_rcheck_trac
             memset(&c, 0, sizeof c);
             st = sc_tracer_run(t, &rays->rays[i], 1, &hits[i], NULL, &c);
             tests[rays->target[i]] = (uint32_t)c.sphere_tests;
-            work->rays += c.rays, work->sphere_tests += c.sphere_tests, work->sphere_rejects += c.sphere_rejects;
-            work->tri_tests += c.tri_tests, work->tri_hits += c.tri_hits;
+            sc_tracer_counters_add(work, &c);
         }
     } else {
         st = sc_tracer_run(t, rays->rays, rays->count, hits, NULL, NULL);

@@ -130,6 +130,13 @@ const sc_bvh *sc_tracer_bvh(const sc_tracer *t)
     return t && t->def.family == SC_TRACER_OURS ? t->handle : NULL;
 }
 
+void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c)
+{
+    to->rays += c->rays, to->nodes += c->nodes, to->leaves += c->leaves;
+    to->sphere_tests += c->sphere_tests, to->sphere_rejects += c->sphere_rejects;
+    to->tri_tests += c->tri_tests, to->tri_hits += c->tri_hits, to->false_positives += c->false_positives;
+}
+
 static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
                           sc_tracer_counters *ctr)
 {
@@ -151,17 +158,11 @@ static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_h
             return st;
     }
     if (ctr) {
-        ctr->rays += n;
-        ctr->nodes += ts.nodes;
-        ctr->leaves += ts.leaves;
-        ctr->sphere_tests += ts.sphere_tests;
-        ctr->sphere_rejects += ts.sphere_rejects;
-        ctr->tri_tests += ts.tri_tests;
-        ctr->tri_hits += ts.tri_hits;
         /* every exact test in a sphere leaf follows a passed sphere; exact
          * only when all leaves carry spheres */
-        if (t->fp_exact)
-            ctr->false_positives += ts.tri_tests - ts.tri_hits;
+        sc_tracer_counters c = { n, ts.nodes, ts.leaves, ts.sphere_tests, ts.sphere_rejects, ts.tri_tests,
+                                 ts.tri_hits, t->fp_exact ? ts.tri_tests - ts.tri_hits : 0 };
+        sc_tracer_counters_add(ctr, &c);
     }
     return SC_OK;
 }
@@ -183,12 +184,9 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
     else
         st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
     if (st == SC_OK && ctr) {
-        ctr->rays += n;
-        ctr->sphere_tests += ec.sphere_tests;
-        ctr->sphere_rejects += ec.sphere_rejects;
-        ctr->tri_tests += ec.tri_tests;
-        ctr->tri_hits += ec.tri_hits;
-        ctr->false_positives += ec.false_positives;
+        sc_tracer_counters c = { n, 0, 0, ec.sphere_tests, ec.sphere_rejects, ec.tri_tests, ec.tri_hits,
+                                 ec.false_positives };
+        sc_tracer_counters_add(ctr, &c);
     }
     return st;
 }

@@ -33,6 +33,8 @@ typedef struct sc_tracer_counters {
     uint64_t rays, nodes, leaves, sphere_tests, sphere_rejects, tri_tests, tri_hits, false_positives;
 } sc_tracer_counters;
 
+void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c);
+
 typedef struct sc_tracer {
     sc_tracer_def def;
     void *handle;            /* sc_bvh * or sc_embree * */
