@@ -18,18 +18,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "common/sc_clock.h"
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_trace.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int cmp(const void *a, const void *b)
 {
@@ -45,13 +38,13 @@ static double time_any(const sc_bvh *b, const sc_ray *r, long iters)
     double t[RUNS];
     volatile int sink = 0;
     for (int k = 0; k < RUNS; k++) {
-        double t0 = now();
+        double t0 = sc_now_seconds();
         for (long i = 0; i < iters; i++) {
             int occ;
             sc_trace_any(b, r, &occ, NULL);
             sink += occ;
         }
-        t[k] = (now() - t0) / (double)iters * 1e9;
+        t[k] = (sc_now_seconds() - t0) / (double)iters * 1e9;
     }
     (void)sink;
     qsort(t, RUNS, sizeof t[0], cmp);

@@ -1,4 +1,4 @@
-# The exact-decision triangle test (SC_TRI_EXACT, src/trace/exact_tri.c)
+# The exact-decision triangle test (SC_TRI_EXACT, src/trace/tri_exact.c)
 # against MPFR and the exact oracle. The shared-mesh case reads
 # ../shared/scenes when it exists and is skipped otherwise.
 if(TARGET spherecull_compare AND TARGET spherecull_scene)

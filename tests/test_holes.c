@@ -71,7 +71,7 @@ static void tris_of(const sc_mesh_view *m, float (*t)[9], uint32_t *id)
 typedef struct want {
     sc_ray ray;
     size_t ngroups;
-    sc_xkind kind[3];
+    sc_cross_kind kind[3];
     uint32_t count[3];
     double t[3];
 } want;
@@ -82,21 +82,21 @@ static void check_classify(const sc_mesh_view *m, const want *w, size_t n)
     uint32_t *id = malloc(m->triangle_count * sizeof *id);
     tris_of(m, t, id);
     for (size_t i = 0; i < n; i++) {
-        sc_xresult x;
-        assert_int_equal(sc_x_classify(&w[i].ray, (const float (*)[9])t, id, m->triangle_count, &x), SC_OK);
+        sc_cross_result x;
+        assert_int_equal(sc_cross_classify(&w[i].ray, (const float (*)[9])t, id, m->triangle_count, &x), SC_OK);
         if (x.ngroups != w[i].ngroups)
             print_message("case %zu: %zu groups, want %zu\n", i, x.ngroups, w[i].ngroups);
         assert_int_equal(x.ngroups, w[i].ngroups);
         for (size_t g = 0; g < x.ngroups; g++) {
             if (x.groups[g].kind != w[i].kind[g])
-                print_message("case %zu group %zu: %s, want %s\n", i, g, sc_xkind_name(x.groups[g].kind),
-                              sc_xkind_name(w[i].kind[g]));
+                print_message("case %zu group %zu: %s, want %s\n", i, g, sc_cross_kind_name(x.groups[g].kind),
+                              sc_cross_kind_name(w[i].kind[g]));
             assert_int_equal(x.groups[g].kind, w[i].kind[g]);
             assert_int_equal(x.groups[g].count, w[i].count[g]);
             assert_true(x.groups[g].t == w[i].t[g]);
         }
         assert_int_equal(x.coplanar, 0);
-        sc_xresult_free(&x);
+        sc_cross_result_free(&x);
     }
     free(t), free(id);
 }
@@ -109,23 +109,23 @@ static void test_classify_known(void **state)
         /* down the z axis: in at the top vertex (4 triangles), out at the
          * bottom one, then through the floor's diagonal (2 triangles) */
         { { { 0, 0, 3 }, 0, { 0, 0, -1 }, INFINITY }, 3,
-          { SC_XK_CROSS, SC_XK_CROSS, SC_XK_CROSS }, { 4, 4, 2 }, { 2, 4, 8 } },
+          { SC_CROSS_CROSS, SC_CROSS_CROSS, SC_CROSS_CROSS }, { 4, 4, 2 }, { 2, 4, 8 } },
         /* over the top vertex, sloping down less than the faces: a touch,
          * then the floor (the old definition's "later hit") */
         { { { -2, -0.5f, 1.5f }, 0, { 1, 0.25f, -0.25f }, INFINITY }, 2,
-          { SC_XK_TOUCH, SC_XK_CROSS }, { 4, 1 }, { 2, 26 } },
+          { SC_CROSS_TOUCH, SC_CROSS_CROSS }, { 4, 1 }, { 2, 26 } },
         /* steeper than the faces through the top vertex: in, out through
          * the edge (1,0,0)-(0,0,-1) at (0.4, 0, -0.6), then the floor */
         { { { -0.5f, 0, 3 }, 0, { 0.25f, 0, -1 }, INFINITY }, 3,
-          { SC_XK_CROSS, SC_XK_CROSS, SC_XK_CROSS }, { 4, 2, 1 }, { 2, 3.6, 8 } },
+          { SC_CROSS_CROSS, SC_CROSS_CROSS, SC_CROSS_CROSS }, { 4, 2, 1 }, { 2, 3.6, 8 } },
         /* into the edge (1,0,0)-(0,0,1) at its midpoint, then out through
          * the edge (-1,0,0)-(0,0,-1) */
         { { { 1.5f, 0, 1.5f }, 0, { -1, 0, -1 }, INFINITY }, 3,
-          { SC_XK_CROSS, SC_XK_CROSS, SC_XK_CROSS }, { 2, 2, 1 }, { 1, 2, 6.5 } },
+          { SC_CROSS_CROSS, SC_CROSS_CROSS, SC_CROSS_CROSS }, { 2, 2, 1 }, { 1, 2, 6.5 } },
         /* along the same edge's outside: touches it, nothing behind */
-        { { { 0.5f, -2, 0.5f }, 0, { 0, 1, 0 }, INFINITY }, 1, { SC_XK_TOUCH }, { 2 }, { 2 } },
+        { { { 0.5f, -2, 0.5f }, 0, { 0, 1, 0 }, INFINITY }, 1, { SC_CROSS_TOUCH }, { 2 }, { 2 } },
         /* tmax before the floor: the touch alone */
-        { { { -2, -0.5f, 1.5f }, 0, { 1, 0.25f, -0.25f }, 10 }, 1, { SC_XK_TOUCH }, { 4 }, { 2 } },
+        { { { -2, -0.5f, 1.5f }, 0, { 1, 0.25f, -0.25f }, 10 }, 1, { SC_CROSS_TOUCH }, { 4 }, { 2 } },
     };
     check_classify(&oct, w, sizeof w / sizeof w[0]);
 
@@ -135,21 +135,21 @@ static void test_classify_known(void **state)
     static const uint32_t SI[] = { 0, 1, 2, 0, 2, 3 };
     sc_mesh_view sq = { SP, 4, SI, 2 };
     const want s[] = {
-        { { { 0.5f, 0.5f, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_XK_CROSS }, { 2 }, { 1 } },
-        { { { 0.5f, 0, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_XK_AMBIG }, { 1 }, { 1 } },
-        { { { 0.75f, -0.5f, 1 }, 0, { 0.25f, 0.5f, -1 }, INFINITY }, 1, { SC_XK_AMBIG }, { 1 }, { 1 } },
-        { { { 0.25f, 0.5f, 2 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_XK_CROSS }, { 1 }, { 2 } },
-        { { { 2, 2, 1 }, 0, { 0, 0, -1 }, INFINITY }, 0, { SC_XK_NONE }, { 0 }, { 0 } },
+        { { { 0.5f, 0.5f, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_CROSS_CROSS }, { 2 }, { 1 } },
+        { { { 0.5f, 0, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_CROSS_AMBIG }, { 1 }, { 1 } },
+        { { { 0.75f, -0.5f, 1 }, 0, { 0.25f, 0.5f, -1 }, INFINITY }, 1, { SC_CROSS_AMBIG }, { 1 }, { 1 } },
+        { { { 0.25f, 0.5f, 2 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_CROSS_CROSS }, { 1 }, { 2 } },
+        { { { 2, 2, 1 }, 0, { 0, 0, -1 }, INFINITY }, 0, { SC_CROSS_NONE }, { 0 }, { 0 } },
     };
     check_classify(&sq, s, sizeof s / sizeof s[0]);
 
-    sc_xresult x;
+    sc_cross_result x;
     sc_ray bad = { { 0, 0, 0 }, 0, { 0, 0, 0 }, INFINITY };
     float t[1][9] = { { 0 } };
     uint32_t id[1] = { 0 };
-    assert_int_equal(sc_x_classify(&bad, (const float (*)[9])t, id, 1, &x), SC_ERR_INVALID_ARGUMENT);
-    assert_int_equal(sc_x_classify(&w[0].ray, NULL, id, 1, &x), SC_ERR_INVALID_ARGUMENT);
-    assert_int_equal(sc_x_classify(&w[0].ray, (const float (*)[9])t, id, 1, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_cross_classify(&bad, (const float (*)[9])t, id, 1, &x), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_cross_classify(&w[0].ray, NULL, id, 1, &x), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_cross_classify(&w[0].ray, (const float (*)[9])t, id, 1, NULL), SC_ERR_INVALID_ARGUMENT);
 }
 
 /* The verdict compare counts, on the octahedron and floor. */
@@ -167,8 +167,8 @@ static void test_judge(void **state)
     assert_int_equal(sc_oracle_run(&m, rays, 3, 1, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o), SC_OK);
     /* the old hint cannot tell ray 0 from ray 1 */
     assert_true(o.hits[0].crosses && o.hits[1].crosses);
-    assert_int_equal(o.hits[0].first_kind, SC_XK_TOUCH);
-    assert_int_equal(o.hits[1].first_kind, SC_XK_CROSS);
+    assert_int_equal(o.hits[0].first_kind, SC_CROSS_TOUCH);
+    assert_int_equal(o.hits[1].first_kind, SC_CROSS_CROSS);
     assert_true(o.hits[0].cross_t == 26 && o.hits[1].cross_t == 2 && isinf(o.hits[2].cross_t));
     assert_int_equal(o.hits[0].cross_tie_count, 1);
     assert_int_equal(o.hits[1].cross_tie_count, 4);
@@ -379,7 +379,7 @@ static void score(const sc_bvh *bvh, const sc_rayset *set, const size_t *sample,
             tl->holes += v == SC_VERDICT_HOLE;
             tl->any_holes += !occ;
         }
-        if (h->hit && h->first_kind == SC_XK_TOUCH) {
+        if (h->hit && h->first_kind == SC_CROSS_TOUCH) {
             tl->graze_rays++;
             tl->grazes_missed += v == SC_VERDICT_GRAZE_MISSED;
         }
@@ -396,8 +396,8 @@ static void check_oracle_consistent(const sc_oracle *o)
 {
     for (size_t s = 0; s < o->count; s++) {
         const sc_oracle_hit *h = &o->hits[s];
-        assert_int_equal(h->hit, h->first_kind != SC_XK_NONE);
-        if (h->first_kind == SC_XK_CROSS) {
+        assert_int_equal(h->hit, h->first_kind != SC_CROSS_NONE);
+        if (h->first_kind == SC_CROSS_CROSS) {
             assert_true(h->cross_t == h->t);
             assert_int_equal(h->cross_tie_count, h->tie_count);
         }

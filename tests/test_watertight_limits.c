@@ -41,16 +41,16 @@ static void exact_classifier_says_the_ray_clips_the_edge(void **state)
 {
     (void)state;
     const uint32_t ids[2] = { 0, 1 };
-    sc_xresult x;
-    assert_int_equal(sc_x_classify(&clip_ray, tris, ids, 2, &x), SC_OK);
+    sc_cross_result x;
+    assert_int_equal(sc_cross_classify(&clip_ray, tris, ids, 2, &x), SC_OK);
     assert_int_equal(x.ngroups, 2);
-    assert_int_equal(x.groups[0].kind, SC_XK_CROSS);
+    assert_int_equal(x.groups[0].kind, SC_CROSS_CROSS);
     assert_int_equal(x.groups[0].tri[0], 0);
     assert_true(x.groups[0].t == 0.5);
-    assert_int_equal(x.groups[1].kind, SC_XK_CROSS);
+    assert_int_equal(x.groups[1].kind, SC_CROSS_CROSS);
     assert_int_equal(x.groups[1].tri[0], 1);
     assert_true(x.groups[1].t > 0.5 && x.groups[1].t < 0.5 + 1e-7);
-    sc_xresult_free(&x);
+    sc_cross_result_free(&x);
 }
 
 static sc_bvh *build(sc_tri_test test)

@@ -3,13 +3,13 @@
  * the 8-wide layout (collapse_bvh8.c) whose leaves leaf_triangles.c
  * encodes; then the handle's lifecycle, its figures and the names of the
  * config's enums. */
-#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "build_internal.h"
+#include "common/sc_clock.h"
+#include "common/sc_names.h"
 
 void sc_bvh_config_default(sc_bvh_config *cfg)
 {
@@ -23,13 +23,6 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
     cfg->tri_test = SC_TRI_WATERTIGHT;
     cfg->sah_bins = 32;
     cfg->traversal_cost = 2.0f;
-}
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 static void *alloc_aligned(size_t bytes)
@@ -62,7 +55,7 @@ sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32
             return SC_ERR_INVALID_ARGUMENT;
     sc_status st;
 
-    double t0 = now_seconds();
+    double t0 = sc_now_seconds();
     sc_bvh *bvh = calloc(1, sizeof *bvh);
     bvh_builder B = { 0 };
     B.cfg = &cfg;
@@ -147,7 +140,7 @@ sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32
     bvh->sphere_bytes = B.sphere_used;
     bvh->depth = B.max_depth;
     bvh->sah_cost = B.sah;
-    bvh->build_seconds = now_seconds() - t0;
+    bvh->build_seconds = sc_now_seconds() - t0;
     free(pbox);
     free(cen);
     free(ids);
@@ -202,39 +195,30 @@ sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info)
 static const char *const mode_names[SC_PREFILTER_MODE_COUNT] = { "off", "circum", "minimal", "auto" };
 static const char *const test_names[SC_TRI_TEST_COUNT] = { "watertight", "moller", "exact" };
 
-static sc_status lookup(const char *const *names, int count, const char *name, int *out)
-{
-    if (!name || !out)
-        return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < count; i++)
-        if (strcmp(names[i], name) == 0) {
-            *out = i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
-}
-
 const char *sc_prefilter_mode_name(sc_prefilter_mode m)
 {
-    return (unsigned)m < SC_PREFILTER_MODE_COUNT ? mode_names[m] : "unknown";
+    return sc_enum_name(mode_names, SC_PREFILTER_MODE_COUNT, (int)m, "unknown");
 }
+
 const char *sc_tri_test_name(sc_tri_test t)
 {
-    return (unsigned)t < SC_TRI_TEST_COUNT ? test_names[t] : "unknown";
+    return sc_enum_name(test_names, SC_TRI_TEST_COUNT, (int)t, "unknown");
 }
+
 sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out)
 {
     int v;
-    sc_status s = lookup(mode_names, SC_PREFILTER_MODE_COUNT, name, &v);
-    if (s == SC_OK)
-        *out = (sc_prefilter_mode)v;
-    return s;
+    if (!out || sc_enum_lookup(mode_names, SC_PREFILTER_MODE_COUNT, name, &v) != 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_prefilter_mode)v;
+    return SC_OK;
 }
+
 sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out)
 {
     int v;
-    sc_status s = lookup(test_names, SC_TRI_TEST_COUNT, name, &v);
-    if (s == SC_OK)
-        *out = (sc_tri_test)v;
-    return s;
+    if (!out || sc_enum_lookup(test_names, SC_TRI_TEST_COUNT, name, &v) != 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_tri_test)v;
+    return SC_OK;
 }

@@ -6,7 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "commands.h"
+#include "cli.h"
+#include "common/sc_names.h"
 #include "sc_accuracy.h"
 #include "sc_families.h"
 
@@ -116,46 +117,40 @@ static void print_table(const report *rep)
            "(degenerate, non-finite input, or r2 outside the exponent range, as for subnormal input).\n");
 }
 
-static void usage(FILE *out)
+enum { O_CSV, O_N, O_SEED };
+static const sc_cli_opt opts[] = {
+    [O_CSV] = { "csv", 0, "FILE", "write one row per method x precision x origin x family", NULL },
+    [O_N] = { "n", 0, "N", "triangles per family, 1..10000000", "2000" },
+    [O_SEED] = { "seed", 0, "S", "triangle seed", "1" },
+};
+
+typedef struct args {
+    const char *csv;
+    long n;
+    unsigned long long seed;
+} args;
+
+static int on_option(void *ctx, int opt, const char *val)
 {
-    fprintf(out, "usage: spherecull accuracy [--csv FILE] [--n N] [--seed S]\n"
-                 "  Measures every circumsphere method (float and double, both origin choices,\n"
-                 "  circum/minimal/prefilter kinds) against a >= 256-bit MPFR reference on random\n"
-                 "  and hard triangle families. --n triangles per family (default 2000).\n");
+    args *a = ctx;
+    switch (opt) {
+    case -1: sc_cli_error("accuracy", "takes no operands ('%s')", val); return 2;
+    case O_CSV: a->csv = val; return 0;
+    case O_N: return sc_cli_int("accuracy", "n", val, 1, 10000000, &a->n) ? 2 : 0;
+    case O_SEED: return sc_cli_u64("accuracy", "seed", val, &a->seed) ? 2 : 0;
+    }
+    return 0;
 }
 
-int sc_cmd_accuracy(int argc, char **argv)
+static int run(int argc, char **argv)
 {
-    const char *csv = NULL;
-    long n = 2000;
-    unsigned long long seed = 1;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
-            usage(stdout);
-            return 0;
-        } else if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
-            csv = argv[++i];
-        } else if (strcmp(argv[i], "--n") == 0 && i + 1 < argc) {
-            char *end;
-            errno = 0;
-            n = strtol(argv[++i], &end, 10);
-            if (*end || errno || n < 1 || n > 10000000) {
-                sc_cli_error("accuracy", "--n wants a whole number from 1 to 10000000, got '%s'", argv[i]);
-                return 2;
-            }
-        } else if (strcmp(argv[i], "--seed") == 0 && i + 1 < argc) {
-            char *end;
-            seed = strtoull(argv[++i], &end, 10);
-            if (*end) {
-                sc_cli_error("accuracy", "--seed wants a whole number, got '%s'", argv[i]);
-                return 2;
-            }
-        } else {
-            sc_cli_error("accuracy", "unknown or incomplete option '%s' (try --help)", argv[i]);
-            return 2;
-        }
-    }
-
+    args a = { NULL, 2000, 1 };
+    int prc = sc_cli_parse(&sc_cli_accuracy, argc, argv, on_option, &a);
+    if (prc)
+        return prc < 0 ? 0 : prc;
+    const char *csv = a.csv;
+    long n = a.n;
+    unsigned long long seed = a.seed;
     if (sc_cli_check_output("accuracy", "--csv", csv) != 0)
         return 1;
     sc_acc_variant variants[MAX_VARIANTS];
@@ -210,8 +205,7 @@ int sc_cmd_accuracy(int argc, char **argv)
     print_table(&rep);
     int rc = 0;
     if (csv) {
-        if (sc_cli_write_atomic(csv, write_csv, &rep) != 0) {
-            sc_cli_error("accuracy", "cannot write '%s': %s", csv, strerror(errno));
+        if (sc_cli_write("accuracy", csv, write_csv, &rep) != 0) {
             rc = 1;
         } else {
             printf("wrote %s (%d rows)\n", csv, rep.count);
@@ -220,3 +214,15 @@ int sc_cmd_accuracy(int argc, char **argv)
     free(rep.rows), free(errs), free(r2errs), free(sorted), free(res);
     return rc;
 }
+
+const sc_cli_cmd sc_cli_accuracy = {
+    .name = "accuracy",
+    .operands = "",
+    .summary = "circumsphere accuracy of every method against MPFR",
+    .details = "Measures every circumsphere method (float and double, both origin choices,\n"
+               "circum/minimal/prefilter kinds) against a >= 256-bit MPFR reference on random\n"
+               "and hard triangle families.\n",
+    .opts = opts,
+    .nopts = SC_NAMES_COUNT(opts),
+    .run = run,
+};

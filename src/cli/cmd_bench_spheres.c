@@ -1,382 +1,68 @@
 /* spherecull bench-spheres: batch-sphere and reject-mask throughput per
  * method x kind x ISA x precision x working set, against a memcpy of the
  * same bytes measured in the same run, beside each variant's centre error
- * against MPFR. Table on stdout, optional CSV and gnuplot PNG. */
+ * against MPFR (the measuring is src/reference/bench_spheres.c). Table on
+ * stdout, optional CSV and gnuplot PNG. */
 #define _POSIX_C_SOURCE 200809L
-#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
-#include "commands.h"
-#include "common/sc_rng.h"
-#include "sc_families.h"
-#include "sc_reference.h"
-#include "isa/isa_dispatch.h"
+#include "cli.h"
+#include "common/sc_atomic_file.h"
+#include "common/sc_gnuplot.h"
+#include "common/sc_names.h"
+#include "sc_bench_spheres.h"
 #include "x86/cpu_features.h"
 
-static const char *CMD = "bench-spheres";
+#define CMD "bench-spheres"
 
-typedef struct row {
-    int method, kind, isa, dbl;
-    const char *ws;          /* L1 | L2 | DRAM */
-    const char *source;      /* soa | indexed | soa-general | soa-noprescale | soa-nostream */
-    double mtri, ns, copy_ratio, err_med, err_max;
-} row;
+enum { O_CSV, O_PLOT, O_QUICK, O_ISA };
+static const sc_cli_opt opts[] = {
+    [O_CSV] = { "csv", 0, "FILE", "write every row", NULL },
+    [O_PLOT] = { "plot", 0, "FILE.png", "speed against error, every method x kind (gnuplot)", NULL },
+    [O_QUICK] = { "quick", 0, NULL, "shrink the DRAM set and the repeats (CI)", NULL },
+    [O_ISA] = { "isa", 0, "LEVEL", "scalar|sse4|avx2|avx512: measure one level (and scalar, the baseline)", "all" },
+};
 
-typedef struct bench {
-    row *rows;
-    size_t n, cap;
-    int quick;
-} bench;
+typedef struct args {
+    const char *csv, *png;
+    int quick, only;
+} args;
 
-static double now(void)
+static int on_option(void *ctx, int opt, const char *val)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-/* One timed batch, for the median-of-repeats helper. */
-typedef struct job {
-    const sc_kernels *k;
-    int dbl, method, kind;
-    unsigned flags;
-    size_t count;
-    sc_tri_source_f sf;
-    sc_tri_source_d sd;
-    sc_spheres_soaf of;
-    sc_spheres_soad od;
-    void *copy_src, *copy_dst;
-    size_t copy_bytes;
-} job;
-
-static void run_job(const job *j)
-{
-    if (j->copy_bytes)
-        memcpy(j->copy_dst, j->copy_src, j->copy_bytes);
-    else if (j->dbl)
-        j->k->sphere->spheres_d(&j->sd, j->count, j->method, j->kind, j->flags, &j->od);
-    else
-        j->k->sphere->spheres_f(&j->sf, j->count, j->method, j->kind, j->flags, &j->of);
-}
-
-/* Seconds per call: the best of `reps` samples, each at least min_time
- * long (the machine is shared; the fastest sample is the one least
- * disturbed by other work). */
-static double time_job(const job *j, int reps, double min_time)
-{
-    double best = INFINITY;
-    run_job(j);                                     /* warm caches and pages */
-    for (int r = 0; r < reps; r++) {
-        int calls = 0;
-        double t0 = now(), el;
-        do {
-            run_job(j);
-            calls++;
-            el = now() - t0;
-        } while (el < min_time);
-        best = fmin(best, el / calls);
-    }
-    return best;
-}
-
-/* DRAM rows: the copy and the kernel alternate, so that both see the same
- * memory traffic from the rest of the machine; best of each. */
-static void time_pair(const job *kernel, const job *copy, int reps, double *tk, double *tc)
-{
-    *tk = *tc = INFINITY;
-    run_job(kernel);
-    for (int r = 0; r < reps; r++) {
-        double t0 = now();
-        run_job(copy);
-        double t1 = now();
-        run_job(kernel);
-        double t2 = now();
-        *tc = fmin(*tc, t1 - t0), *tk = fmin(*tk, t2 - t1);
-    }
-}
-
-/* The memory ceiling of the indexed input: the same 9 coordinates per
- * triangle copied through the same shuffled index buffer into SoA arrays,
- * with the kernels' prefetch distance. */
-static double time_indexed_copy(const float *verts, const uint32_t *idx, float *dst, size_t n, int reps)
-{
-    double best = INFINITY;
-    for (int r = 0; r < reps; r++) {
-        double t0 = now();
-        for (size_t t = 0; t < n; t++) {
-            if (t + SC_PREFETCH_AHEAD < n)
-                for (int k = 0; k < 3; k++)
-                    __builtin_prefetch(verts + 3 * (size_t)idx[3 * (t + SC_PREFETCH_AHEAD) + (size_t)k]);
-            for (int k = 0; k < 3; k++) {
-                const float *p = verts + 3 * (size_t)idx[3 * t + (size_t)k];
-                for (int a = 0; a < 3; a++)
-                    dst[(size_t)(3 * k + a) * n + t] = p[a];
-            }
+    args *a = ctx;
+    sc_isa isa;
+    switch (opt) {
+    case -1: sc_cli_error(CMD, "takes no operands ('%s')", val); return 2;
+    case O_CSV: a->csv = val; return 0;
+    case O_PLOT: a->png = val; return 0;
+    case O_QUICK: a->quick = 1; return 0;
+    case O_ISA:
+        if (sc_isa_from_name(val, &isa) != SC_OK) {
+            sc_cli_error(CMD, "unknown ISA level '%s' (scalar, sse4, avx2, avx512)", val);
+            return 2;
         }
-        best = fmin(best, now() - t0);
-    }
-    return best;
-}
-
-static void add_row(bench *b, row r)
-{
-    if (b->n == b->cap) {
-        b->cap = b->cap ? 2 * b->cap : 256;
-        b->rows = realloc(b->rows, b->cap * sizeof *b->rows);
-    }
-    b->rows[b->n++] = r;
-}
-
-/* ---- data ---------------------------------------------------------------- */
-
-typedef struct dataset {
-    size_t n;
-    float *f;          /* 9 SoA arrays of n floats */
-    double *d;         /* 9 SoA arrays of n doubles (NULL if not needed) */
-    float *vf;         /* vertex buffer, 9n floats, for the indexed source */
-    uint32_t *idx;     /* 3n */
-    float *outf;
-    double *outd;
-    void *copy_dst;
-} dataset;
-
-static int make_data(dataset *ds, size_t n, int with_double, uint64_t seed)
-{
-    size_t pad = sc_simd_padded(n);
-    memset(ds, 0, sizeof *ds);
-    ds->n = n;
-    ds->f = aligned_alloc(64, sizeof(float) * 9 * pad);
-    ds->vf = aligned_alloc(64, sizeof(float) * 9 * pad);
-    ds->idx = aligned_alloc(64, sizeof(uint32_t) * 3 * pad);
-    ds->outf = aligned_alloc(64, sizeof(float) * 4 * pad);
-    size_t copy = (with_double ? sizeof(double) : sizeof(float)) * 13 * pad;
-    ds->copy_dst = aligned_alloc(64, copy);
-    if (with_double) {
-        ds->d = aligned_alloc(64, sizeof(double) * 9 * pad);
-        ds->outd = aligned_alloc(64, sizeof(double) * 4 * pad);
-    }
-    if (!ds->f || !ds->vf || !ds->idx || !ds->outf || !ds->copy_dst || (with_double && (!ds->d || !ds->outd)))
-        return -1;
-    sc_rng rng;
-    sc_rng_seed(&rng, seed);
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 9; k++) {
-            float v = (float)sc_rng_range(&rng, -1, 1);
-            ds->f[(size_t)k * n + i] = v;
-            ds->vf[9 * i + (size_t)k] = v;
-            if (with_double)
-                ds->d[(size_t)k * n + i] = v;
+        if (!sc_isa_supported(isa)) {
+            sc_cli_error(CMD, "ISA level '%s' is not supported by this CPU or build", val);
+            return 1;
         }
-    /* Shuffled triangle order in the index buffer, so gathers are not sequential. */
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++)
-            ds->idx[3 * i + (size_t)k] = (uint32_t)(3 * i + (size_t)k);
-    for (size_t i = n; i-- > 1;) {
-        size_t j = (size_t)(sc_rng_next(&rng) % (i + 1));
-        for (int k = 0; k < 3; k++) {
-            uint32_t t = ds->idx[3 * i + (size_t)k];
-            ds->idx[3 * i + (size_t)k] = ds->idx[3 * j + (size_t)k];
-            ds->idx[3 * j + (size_t)k] = t;
-        }
+        a->only = (int)isa;
+        return 0;
     }
     return 0;
 }
 
-static void free_data(dataset *ds)
-{
-    free(ds->f), free(ds->d), free(ds->vf), free(ds->idx), free(ds->outf), free(ds->outd), free(ds->copy_dst);
-}
-
-static job make_job(const dataset *ds, const sc_kernels *k, int dbl, int method, int kind, int indexed)
-{
-    job j;
-    memset(&j, 0, sizeof j);
-    size_t n = ds->n, pad = sc_simd_padded(n);
-    j.k = k, j.dbl = dbl, j.method = method, j.kind = kind, j.count = n;
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++) {
-            j.sf.soa[v][a] = ds->f + (size_t)(3 * v + a) * n;
-            if (ds->d)
-                j.sd.soa[v][a] = ds->d + (size_t)(3 * v + a) * n;
-        }
-    if (indexed) {
-        j.sf.vertices = ds->vf, j.sf.vertex_count = 3 * n, j.sf.indices = ds->idx;
-    }
-    j.of = (sc_spheres_soaf){ ds->outf, ds->outf + pad, ds->outf + 2 * pad, ds->outf + 3 * pad };
-    if (ds->outd)
-        j.od = (sc_spheres_soad){ ds->outd, ds->outd + pad, ds->outd + 2 * pad, ds->outd + 3 * pad };
-    return j;
-}
-
-/* Bytes a batch moves: 9 coordinates in (indexed: 3 indices + 9 gathered
- * coordinates), 4 values out. */
-static double batch_bytes(size_t n, int dbl, int indexed)
-{
-    double s = dbl ? 8 : 4;
-    return (double)n * ((indexed ? 12 + 9 * s : 9 * s) + 4 * s);
-}
-
-/* ---- errors against MPFR -------------------------------------------------- */
-
-typedef struct errset {
-    size_t n;
-    float (*V)[3][3];
-    sc_ref_sphere *rc, *rm;
-    int *rc_ok, *rm_ok;
-} errset;
-
-static void make_errset(errset *e, int per_family)
-{
-    e->n = (size_t)per_family * SC_FAM_COUNT;
-    e->V = malloc(sizeof(float) * 9 * e->n);
-    e->rc = malloc(sizeof *e->rc * e->n), e->rm = malloc(sizeof *e->rm * e->n);
-    e->rc_ok = malloc(sizeof(int) * e->n), e->rm_ok = malloc(sizeof(int) * e->n);
-    sc_rng rng;
-    sc_rng_seed(&rng, 12345);
-    size_t t = 0;
-    for (int f = 0; f < SC_FAM_COUNT; f++)
-        for (int i = 0; i < per_family; i++, t++) {
-            double Vd[3][3];
-            sc_family_triangle((sc_family)f, &rng, 1, Vd);
-            for (int k = 0; k < 3; k++)
-                for (int a = 0; a < 3; a++)
-                    e->V[t][k][a] = (float)Vd[k][a];
-            sc_ref_sphere_init(&e->rc[t]), sc_ref_sphere_init(&e->rm[t]);
-            e->rc_ok[t] = sc_ref_circumsphere(Vd[0], Vd[1], Vd[2], &e->rc[t]);
-            e->rm_ok[t] = sc_ref_minimal_sphere(Vd[0], Vd[1], Vd[2], &e->rm[t]);
-        }
-}
-
-static void free_errset(errset *e)
-{
-    for (size_t t = 0; t < e->n; t++)
-        sc_ref_sphere_clear(&e->rc[t]), sc_ref_sphere_clear(&e->rm[t]);
-    free(e->V), free(e->rc), free(e->rm), free(e->rc_ok), free(e->rm_ok);
-}
-
-/* Median and max centre error over the triangles whose reference exists and
- * whose computed sphere is finite (failures are counted by `accuracy`). */
-static void measure_error(const errset *e, const sc_kernels *k, int dbl, int method, int kind,
-                          double *med, double *mx)
-{
-    size_t n = e->n, pad = sc_simd_padded(n);
-    float *fin = malloc(sizeof(float) * 9 * n);
-    double *din = malloc(sizeof(double) * 9 * n);
-    for (size_t t = 0; t < n; t++)
-        for (int v = 0; v < 3; v++)
-            for (int a = 0; a < 3; a++)
-                fin[(size_t)(3 * v + a) * n + t] = e->V[t][v][a], din[(size_t)(3 * v + a) * n + t] = e->V[t][v][a];
-    float *of = malloc(sizeof(float) * 4 * pad);
-    double *od = malloc(sizeof(double) * 4 * pad);
-    sc_tri_source_f sf;
-    sc_tri_source_d sd;
-    memset(&sf, 0, sizeof sf), memset(&sd, 0, sizeof sd);
-    for (int v = 0; v < 3; v++)
-        for (int a = 0; a < 3; a++)
-            sf.soa[v][a] = fin + (size_t)(3 * v + a) * n, sd.soa[v][a] = din + (size_t)(3 * v + a) * n;
-    sc_spheres_soaf oF = { of, of + pad, of + 2 * pad, of + 3 * pad };
-    sc_spheres_soad oD = { od, od + pad, od + 2 * pad, od + 3 * pad };
-    if (dbl)
-        k->sphere->spheres_d(&sd, n, method, kind, 0, &oD);
-    else
-        k->sphere->spheres_f(&sf, n, method, kind, 0, &oF);
-    double *errs = malloc(sizeof(double) * n);
-    int m = 0;
-    for (size_t t = 0; t < n; t++) {
-        int circ = kind == SC_BATCH_CIRCUM || kind == SC_BATCH_PREFILTER_CIRCUM;
-        const sc_ref_sphere *ref = circ ? &e->rc[t] : &e->rm[t];
-        if (!(circ ? e->rc_ok[t] : e->rm_ok[t]))
-            continue;
-        double c[3], r2;
-        if (dbl)
-            c[0] = od[t], c[1] = od[pad + t], c[2] = od[2 * pad + t], r2 = od[3 * pad + t];
-        else
-            c[0] = of[t], c[1] = of[pad + t], c[2] = of[2 * pad + t], r2 = of[3 * pad + t];
-        if (!isfinite(r2))
-            continue;
-        errs[m++] = sc_ref_centre_error(ref, c);
-    }
-    *med = m ? median(errs, m) : NAN;
-    *mx = m ? errs[m - 1] : NAN;
-    free(fin), free(din), free(of), free(od), free(errs);
-}
-
-/* ---- reject masks --------------------------------------------------------- */
-
-static double time_reject(const sc_kernels *k, int width, int packet, int quick)
-{
-    enum { NB = 1024 };
-    sc_sphere_block16 *blk = aligned_alloc(64, sizeof *blk * NB);
-    sc_ray_packet16 *pk = aligned_alloc(64, sizeof *pk * NB);
-    sc_rng rng;
-    sc_rng_seed(&rng, 9);
-    for (int b = 0; b < NB; b++)
-        for (int i = 0; i < 16; i++) {
-            blk[b].cx[i] = (float)sc_rng_range(&rng, -1, 1), blk[b].cy[i] = (float)sc_rng_range(&rng, -1, 1);
-            blk[b].cz[i] = (float)sc_rng_range(&rng, -1, 1), blk[b].r2[i] = (float)sc_rng_range(&rng, 0, 0.1);
-            pk[b].ox[i] = (float)sc_rng_range(&rng, -3, 3), pk[b].oy[i] = (float)sc_rng_range(&rng, -3, 3);
-            pk[b].oz[i] = (float)sc_rng_range(&rng, -3, 3), pk[b].dx[i] = (float)sc_rng_range(&rng, -1, 1);
-            pk[b].dy[i] = (float)sc_rng_range(&rng, -1, 1), pk[b].dz[i] = (float)sc_rng_range(&rng, -1, 1);
-            pk[b].tmin[i] = 0, pk[b].tmax[i] = INFINITY;
-        }
-    sc_ray ray = { { 2.5f, 0.1f, -0.3f }, 0, { -1, 0.05f, 0.1f }, INFINITY };
-    const float c[3] = { 0.1f, 0.2f, 0.3f };
-    double t[7];
-    int reps = quick ? 3 : 7;
-    volatile uint32_t sink = 0;
-    for (int r = 0; r < reps; r++) {
-        uint32_t acc = 0;
-        long calls = 0;
-        double t0 = now(), el;
-        do {
-            for (int b = 0; b < NB; b++) {
-                if (packet)
-                    acc += width == 8 ? k->sphere->packet8((const sc_ray_packet8 *)&pk[b], c, 0.05f)
-                                      : k->sphere->packet16(&pk[b], c, 0.05f);
-                else if (width == 4)
-                    acc += k->sphere->reject4(&ray, (const sc_sphere_block4 *)&blk[b]);
-                else if (width == 8)
-                    acc += k->sphere->reject8(&ray, (const sc_sphere_block8 *)&blk[b]);
-                else
-                    acc += k->sphere->reject16(&ray, &blk[b]);
-            }
-            calls += NB;
-            el = now() - t0;
-        } while (el < (quick ? 0.005 : 0.02));
-        sink += acc;
-        t[r] = el / (double)calls * 1e9;
-    }
-    (void)sink;
-    free(blk), free(pk);
-    return median(t, reps);
-}
-
-/* ---- output --------------------------------------------------------------- */
-
 static int write_csv(void *ctx, FILE *f)
 {
-    const bench *b = ctx;
+    const sc_bsph_report *b = ctx;
     fprintf(f, "method,kind,isa,precision,working_set,source,mtri_per_s,ns_per_tri,copy_ratio,"
                "centre_err_median,centre_err_max\n");
     for (size_t i = 0; i < b->n; i++) {
-        const row *r = &b->rows[i];
+        const sc_bsph_row *r = &b->rows[i];
         fprintf(f, "%s,%s,%s,%s,%s,%s,%.4g,%.4g,%.4g,%.4g,%.4g\n", sc_method_name((sc_method)r->method),
                 sc_batch_kind_name((sc_batch_kind)r->kind), sc_isa_name((sc_isa)r->isa),
                 r->dbl ? "double" : "float", r->ws, r->source, r->mtri, r->ns, r->copy_ratio, r->err_med,
@@ -385,113 +71,59 @@ static int write_csv(void *ctx, FILE *f)
     return 0;
 }
 
-static int plot(const bench *b, const char *png)
+/* Speed against error at L1, one series per ISA x precision; the data
+ * travel inside the script (a datablock), the picture out of gnuplot's
+ * standard output into an atomic write. */
+static int plot(const sc_bsph_report *b, const char *png)
 {
-    /* Data and script in temp files; gnuplot writes png.tmp, renamed on success. */
-    char dat[] = "/tmp/sc_bench_XXXXXX";
-    int fd = mkstemp(dat);
-    if (fd < 0)
+    char *script = NULL;
+    size_t len = 0;
+    FILE *g = open_memstream(&script, &len);
+    if (!g)
         return -1;
-    FILE *f = fdopen(fd, "w");
-    static const char *const isas[SC_ISA_COUNT] = { "scalar", "sse4", "avx2", "avx512" };
-    int blocks = 0;
+    fprintf(g, "$data << EOD\n");
     for (int isa = 0; isa < SC_ISA_COUNT; isa++)
         for (int dbl = 0; dbl < 2; dbl++) {
-            fprintf(f, "# %s %s\n", isas[isa], dbl ? "double" : "float");
+            fprintf(g, "# %s %s\n", sc_isa_name((sc_isa)isa), dbl ? "double" : "float");
             for (size_t i = 0; i < b->n; i++) {
-                const row *r = &b->rows[i];
+                const sc_bsph_row *r = &b->rows[i];
                 if (r->isa == isa && r->dbl == dbl && strcmp(r->ws, "L1") == 0 && strcmp(r->source, "soa") == 0)
-                    fprintf(f, "%g %g %g\n", r->mtri, fmax(r->err_max, 1e-18), fmax(r->err_med, 1e-18));
+                    fprintf(g, "%g %g %g\n", r->mtri, fmax(r->err_max, 1e-18), fmax(r->err_med, 1e-18));
             }
-            fprintf(f, "\n\n");
-            blocks++;
+            fprintf(g, "\n\n");
         }
-    fclose(f);
-    size_t len = strlen(png) + 8;
-    char *tmp = malloc(len);
-    snprintf(tmp, len, "%s.tmp", png);
-    FILE *g = popen("gnuplot", "w");
-    if (!g) {
-        unlink(dat);
-        free(tmp);
-        return -1;
-    }
-    fprintf(g, "set terminal pngcairo size 1100,750\nset output '%s'\n", tmp);
+    fprintf(g, "EOD\nset terminal pngcairo size 1100,750\n");
     fprintf(g, "set logscale xy\nset xlabel 'throughput, million triangles/s (L1-resident, log)'\n"
                "set ylabel 'centre error / radius vs MPFR (log)'\nset grid\nset key outside right\n"
-               "set title 'spherecull bench-spheres: speed vs error, every method x kind (max: filled, median: open)'\n");
-    fprintf(g, "plot ");
-    int first = 1, blk = 0;
+               "set title 'spherecull bench-spheres: speed vs error, every method x kind (max: filled, median: open)'\n"
+               "plot ");
+    int blk = 0;
     for (int isa = 0; isa < SC_ISA_COUNT; isa++)
         for (int dbl = 0; dbl < 2; dbl++, blk++) {
-            fprintf(g, "%s'%s' index %d using 1:2 with points pt %d lc %d title '%s %s max', "
-                       "'%s' index %d using 1:3 with points pt %d lc %d title '%s %s median'",
-                    first ? "" : ", ", dat, blk, 7 + 2 * dbl, isa + 1, isas[isa], dbl ? "double" : "float",
-                    dat, blk, 6 + 2 * dbl, isa + 1, isas[isa], dbl ? "double" : "float");
-            first = 0;
+            const char *in = sc_isa_name((sc_isa)isa), *pn = dbl ? "double" : "float";
+            fprintf(g, "%s$data index %d using 1:2 with points pt %d lc %d title '%s %s max', "
+                       "$data index %d using 1:3 with points pt %d lc %d title '%s %s median'",
+                    blk ? ", " : "", blk, 7 + 2 * dbl, isa + 1, in, pn, blk, 6 + 2 * dbl, isa + 1, in, pn);
         }
     fprintf(g, "\n");
-    int rc = pclose(g);
-    unlink(dat);
-    (void)blocks;
-    int ok = rc == 0 && rename(tmp, png) == 0;
-    if (!ok)
-        unlink(tmp);
-    free(tmp);
-    return ok ? 0 : -1;
+    int rc = fclose(g) == 0 && script ? sc_write_atomic(png, sc_gnuplot_write, script) : -1;
+    free(script);
+    return rc;
 }
 
-static const row *find(const bench *b, int method, int kind, int isa, int dbl, const char *ws, const char *src)
+static void print_note(void *ctx, const char *line)
 {
-    for (size_t i = 0; i < b->n; i++) {
-        const row *r = &b->rows[i];
-        if (r->method == method && r->kind == kind && r->isa == isa && r->dbl == dbl && strcmp(r->ws, ws) == 0 &&
-            strcmp(r->source, src) == 0)
-            return r;
-    }
-    return NULL;
+    (void)ctx;
+    fputs(line, stdout);
 }
 
-static void usage(FILE *f)
+static int run(int argc, char **argv)
 {
-    fprintf(f, "usage: spherecull bench-spheres [--csv FILE] [--plot FILE.png] [--quick] [--isa LEVEL]\n"
-               "  Throughput of the batch-sphere kernels (method x kind x ISA x precision) at L1-, L2-\n"
-               "  and DRAM-sized working sets against a memcpy of the same bytes, reject-mask cost,\n"
-               "  and each variant's centre error against MPFR. --quick shrinks the DRAM set and the\n"
-               "  repeats for CI; --isa measures one level (and scalar, the baseline).\n");
-}
-
-int sc_cmd_bench_spheres(int argc, char **argv)
-{
-    const char *csv = NULL, *png = NULL;
-    int quick = 0, only = -1;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--csv") == 0 && i + 1 < argc) {
-            csv = argv[++i];
-        } else if (strcmp(argv[i], "--plot") == 0 && i + 1 < argc) {
-            png = argv[++i];
-        } else if (strcmp(argv[i], "--quick") == 0) {
-            quick = 1;
-        } else if (strcmp(argv[i], "--isa") == 0 && i + 1 < argc) {
-            sc_isa isa;
-            if (sc_isa_from_name(argv[++i], &isa) != SC_OK) {
-                sc_cli_error(CMD, "unknown ISA level '%s' (scalar, sse4, avx2, avx512)", argv[i]);
-                return 2;
-            }
-            if (!sc_isa_supported(isa)) {
-                sc_cli_error(CMD, "ISA level '%s' is not supported by this CPU or build", argv[i]);
-                return 1;
-            }
-            only = (int)isa;
-        } else if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
-            usage(stdout);
-            return 0;
-        } else {
-            sc_cli_error(CMD, "unknown or incomplete option '%s' (try --help)", argv[i]);
-            return 2;
-        }
-    }
-    if (sc_cli_check_output(CMD, "--csv", csv) != 0 || sc_cli_check_output(CMD, "--plot", png) != 0)
+    args a = { NULL, NULL, 0, -1 };
+    int prc = sc_cli_parse(&sc_cli_bench_spheres, argc, argv, on_option, &a);
+    if (prc)
+        return prc < 0 ? 0 : prc;
+    if (sc_cli_check_output(CMD, "--csv", a.csv) != 0 || sc_cli_check_output(CMD, "--plot", a.png) != 0)
         return 1;
     sc_status st = sc_simd_init();
     if (st != SC_OK) {
@@ -509,102 +141,19 @@ int sc_cmd_bench_spheres(int argc, char **argv)
            "sources: soa = SoA input (fast path for the prefilter kinds); soa-general = the general path only\n"
            "  (the kernels before the fast path); soa-noprescale = general path without prescaling;\n"
            "  soa-nostream = no streaming stores; indexed = vertex buffer + shuffled index buffer\n\n",
-           quick ? 3 : 5);
-
-    int isas[SC_ISA_COUNT], nisa = 0;
-    for (int i = 0; i < SC_ISA_COUNT; i++)
-        if (sc_isa_supported((sc_isa)i) && (only < 0 || i == only || i == SC_ISA_SCALAR))
-            isas[nisa++] = i;
-    int best = isas[nisa - 1];
-    int reps = quick ? 3 : 5;
-    double min_time = quick ? 0.003 : 0.02;
-
-    bench b = { NULL, 0, 0, quick };
-    errset es;
-    make_errset(&es, quick ? 60 : 200);
-
-    double idx_copy_ns = NAN;
-    static const struct { const char *name; size_t n; } sets[3] = {
-        { "L1", 256 }, { "L2", 8192 }, { "DRAM", 10000000 },
-    };
-    for (int s = 0; s < 3; s++) {
-        size_t n = sets[s].n;
-        int dram = s == 2;
-        if (dram && quick)
-            n = 2000000;
-        dataset ds;
-        if (make_data(&ds, n, 1, 1 + (uint64_t)s) != 0) {
-            free_data(&ds);
-            sc_cli_error(CMD, "out of memory for %zu triangles", n);
-            return 1;
-        }
-        if (dram) {
-            double ti = time_indexed_copy(ds.vf, ds.idx, (float *)ds.copy_dst, n, reps);
-            idx_copy_ns = ti / (double)n * 1e9;
-            printf("DRAM float copy through the shuffled index buffer: %.2f ns/triangle (%.2f GB/s of 64 B/tri)\n",
-                   idx_copy_ns, batch_bytes(n, 0, 1) / ti / 1e9);
-        }
-        for (int dbl = 0; dbl < 2; dbl++) {
-            job cj = make_job(&ds, NULL, dbl, 0, 0, 0);
-            cj.copy_src = dbl ? (void *)ds.d : (void *)ds.f;
-            cj.copy_dst = ds.copy_dst;
-            cj.copy_bytes = (size_t)(batch_bytes(n, dbl, 0) / 2);
-            double tc = time_job(&cj, reps, min_time);
-            double copy_bw = 2.0 * (double)cj.copy_bytes / tc;
-            printf("%-4s %-6s memcpy of %.3g MB: %.2f GB/s (read + write)%s\n", sets[s].name, dbl ? "double" : "float",
-                   (double)cj.copy_bytes / 1e6, copy_bw / 1e9, dram ? "; rows re-measure it paired" : "");
-            for (int ii = 0; ii < nisa; ii++) {
-                const sc_kernels *k = sc_kernels_for((sc_isa)isas[ii]);
-                for (int m = 0; m < SC_METHOD_COUNT; m++)
-                    for (int kind = 0; kind < SC_BATCH_KIND_COUNT; kind++) {
-                        /* DRAM: the prefilter kinds only (what a tracer builds); double textbook only. */
-                        if (dram && (kind < SC_BATCH_PREFILTER_CIRCUM || (dbl && m != SC_METHOD_TEXTBOOK)))
-                            continue;
-                        static const char *const src_name[5] = { "soa", "indexed", "soa-general",
-                                                                 "soa-noprescale", "soa-nostream" };
-                        for (int src = 0; src < 5; src++) {
-                            int tb = m == SC_METHOD_TEXTBOOK;
-                            if (src > 0 && !(tb && (kind == SC_BATCH_PREFILTER_MINIMAL ||
-                                                    (src == 2 && kind == SC_BATCH_PREFILTER_CIRCUM))))
-                                continue;
-                            if (src > 0 && isas[ii] == SC_ISA_SCALAR && src != 1)
-                                continue;    /* the scalar level has one path and always prescales */
-                            if ((src == 1 && dbl) || (src == 4 && !dram))
-                                continue;
-                            job j = make_job(&ds, k, dbl, m, kind, src == 1);
-                            j.flags = src == 2 ? SC_KFLAG_GENERAL
-                                    : src == 3 ? SC_KFLAG_GENERAL | SC_KFLAG_NO_PRESCALE
-                                    : src == 4 ? SC_KFLAG_NO_STREAM : 0;
-                            double t, bw = copy_bw;
-                            if (dram) {
-                                double tcp;
-                                time_pair(&j, &cj, quick ? 3 : 5, &t, &tcp);
-                                bw = 2.0 * (double)cj.copy_bytes / tcp;
-                            } else {
-                                t = time_job(&j, reps, min_time);
-                            }
-                            row r = { m, kind, isas[ii], dbl, sets[s].name, src_name[src],
-                                      (double)n / t / 1e6, t / (double)n * 1e9,
-                                      batch_bytes(n, dbl, src == 1) / t / bw, 0, 0 };
-                            const row *prev = find(&b, m, kind, isas[ii], dbl, "L1", "soa");
-                            if (prev && src == 0) {
-                                r.err_med = prev->err_med, r.err_max = prev->err_max;
-                            } else {
-                                measure_error(&es, k, dbl, m, kind, &r.err_med, &r.err_max);
-                            }
-                            add_row(&b, r);
-                        }
-                    }
-            }
-        }
-        free_data(&ds);
+           a.quick ? 3 : 5);
+    sc_bsph_report b;
+    if ((st = sc_bsph_run(a.quick, a.only, &b, print_note, NULL)) != SC_OK) {
+        sc_cli_error(CMD, "%s", sc_strerror(st));
+        sc_bsph_free(&b);
+        return 1;
     }
-    free_errset(&es);
+    const int quick = a.quick;
 
     printf("\n%-18s %-17s %-6s %-6s %-4s %-14s %9s %8s %7s %10s %10s\n", "method", "kind", "isa", "prec", "set",
            "source", "Mtri/s", "ns/tri", "copy", "err_med", "err_max");
     for (size_t i = 0; i < b.n; i++) {
-        const row *r = &b.rows[i];
+        const sc_bsph_row *r = &b.rows[i];
         printf("%-18s %-17s %-6s %-6s %-4s %-14s %9.1f %8.2f %7.3f %10.2e %10.2e\n",
                sc_method_name((sc_method)r->method), sc_batch_kind_name((sc_batch_kind)r->kind),
                sc_isa_name((sc_isa)r->isa), r->dbl ? "double" : "float", r->ws, r->source, r->mtri, r->ns,
@@ -613,32 +162,30 @@ int sc_cmd_bench_spheres(int argc, char **argv)
 
     printf("\nreject masks, ns per call (one ray vs block / one sphere vs packet):\n%-8s %8s %8s %8s %9s %9s\n",
            "isa", "block4", "block8", "block16", "packet8", "packet16");
-    for (int ii = 0; ii < nisa; ii++) {
-        const sc_kernels *k = sc_kernels_for((sc_isa)isas[ii]);
-        printf("%-8s %8.2f %8.2f %8.2f %9.2f %9.2f\n", sc_isa_name((sc_isa)isas[ii]), time_reject(k, 4, 0, quick),
-               time_reject(k, 8, 0, quick), time_reject(k, 16, 0, quick), time_reject(k, 8, 1, quick),
-               time_reject(k, 16, 1, quick));
+    for (int ii = 0; ii < b.nisa; ii++) {
+        const double *t = b.reject_ns[ii];
+        printf("%-8s %8.2f %8.2f %8.2f %9.2f %9.2f\n", sc_isa_name((sc_isa)b.isas[ii]), t[0], t[1], t[2], t[3], t[4]);
     }
 
     printf("\nthe paper's claim (projective faster than textbook by 5-10%%, C#), circumsphere, float, L1:\n");
-    for (int ii = 0; ii < nisa; ii++) {
-        const row *tb = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_CIRCUM, isas[ii], 0, "L1", "soa");
-        const row *pl = find(&b, SC_METHOD_PROJECTIVE_LITERAL, SC_BATCH_CIRCUM, isas[ii], 0, "L1", "soa");
-        const row *pr = find(&b, SC_METHOD_PROJECTIVE_REDUCED, SC_BATCH_CIRCUM, isas[ii], 0, "L1", "soa");
+    for (int ii = 0; ii < b.nisa; ii++) {
+        const sc_bsph_row *tb = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_CIRCUM, b.isas[ii], 0, "L1", "soa");
+        const sc_bsph_row *pl = sc_bsph_find(&b, SC_METHOD_PROJECTIVE_LITERAL, SC_BATCH_CIRCUM, b.isas[ii], 0, "L1", "soa");
+        const sc_bsph_row *pr = sc_bsph_find(&b, SC_METHOD_PROJECTIVE_REDUCED, SC_BATCH_CIRCUM, b.isas[ii], 0, "L1", "soa");
         if (tb && pl && pr)
             printf("  %-7s projective-literal %.2fx, projective-reduced %.2fx the textbook speed\n",
-                   sc_isa_name((sc_isa)isas[ii]), pl->mtri / tb->mtri, pr->mtri / tb->mtri);
+                   sc_isa_name((sc_isa)b.isas[ii]), pl->mtri / tb->mtri, pr->mtri / tb->mtri);
     }
 
     printf("\nDRAM copy ratios (kernel bytes/s over memcpy's, paired; target >= 0.8), textbook, float:\n");
-    for (int ii = 0; ii < nisa; ii++)
+    for (int ii = 0; ii < b.nisa; ii++)
         for (int kind = SC_BATCH_PREFILTER_CIRCUM; kind <= SC_BATCH_PREFILTER_MINIMAL; kind++) {
-            const row *f = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "soa");
-            const row *g = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "soa-general");
-            const row *x = find(&b, SC_METHOD_TEXTBOOK, kind, isas[ii], 0, "DRAM", "indexed");
+            const sc_bsph_row *f = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, kind, b.isas[ii], 0, "DRAM", "soa");
+            const sc_bsph_row *g = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, kind, b.isas[ii], 0, "DRAM", "soa-general");
+            const sc_bsph_row *x = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, kind, b.isas[ii], 0, "DRAM", "indexed");
             if (!f)
                 continue;
-            printf("  %-7s %-17s %.2f (%s)", sc_isa_name((sc_isa)isas[ii]), sc_batch_kind_name((sc_batch_kind)kind),
+            printf("  %-7s %-17s %.2f (%s)", sc_isa_name((sc_isa)b.isas[ii]), sc_batch_kind_name((sc_batch_kind)kind),
                    f->copy_ratio, f->copy_ratio >= 0.8 ? "met" : "NOT met");
             if (g)
                 printf("; general path %.2f", g->copy_ratio);
@@ -646,20 +193,20 @@ int sc_cmd_bench_spheres(int argc, char **argv)
                 printf("; indexed %.3f", x->copy_ratio);
             printf("\n");
         }
-    const row *bi = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "indexed");
+    const sc_bsph_row *bi = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "DRAM", "indexed");
     if (bi)
         printf("  indexed, %s: %.2f ns/triangle, %.2fx the time of a plain copy of the same vertices through the\n"
                "  same shuffled index buffer (%.2f ns/triangle): bound by the random vertex reads, not by memcpy\n",
-               sc_isa_name((sc_isa)best), bi->ns, bi->ns / idx_copy_ns, idx_copy_ns);
+               sc_isa_name((sc_isa)b.best), bi->ns, bi->ns / b.idx_copy_ns, b.idx_copy_ns);
 
-    const row *base = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, SC_ISA_SCALAR, 0, "L1", "soa");
-    const row *base_c = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_CIRCUM, SC_ISA_SCALAR, 0, "L1", "soa");
-    const row *top = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa");
-    const row *nops = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa-noprescale");
-    const row *gen = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "L1", "soa-general");
-    const row *dr = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "soa");
-    const row *dri = find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, best, 0, "DRAM", "indexed");
-    printf("\ntargets (%s, textbook, prefilter-minimal, float):\n", sc_isa_name((sc_isa)best));
+    const sc_bsph_row *base = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, SC_ISA_SCALAR, 0, "L1", "soa");
+    const sc_bsph_row *base_c = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_CIRCUM, SC_ISA_SCALAR, 0, "L1", "soa");
+    const sc_bsph_row *top = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "L1", "soa");
+    const sc_bsph_row *nops = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "L1", "soa-noprescale");
+    const sc_bsph_row *gen = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "L1", "soa-general");
+    const sc_bsph_row *dr = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "DRAM", "soa");
+    const sc_bsph_row *dri = sc_bsph_find(&b, SC_METHOD_TEXTBOOK, SC_BATCH_PREFILTER_MINIMAL, b.best, 0, "DRAM", "indexed");
+    printf("\ntargets (%s, textbook, prefilter-minimal, float):\n", sc_isa_name((sc_isa)b.best));
     if (base && top && base_c)
         printf("  in-cache speed-up vs scalar textbook: %.1fx same kind, %.1fx vs scalar circum (target >= 10x: %s)\n",
                top->mtri / base->mtri, top->mtri / base_c->mtri, top->mtri / base->mtri >= 10 ? "met" : "NOT met");
@@ -675,14 +222,24 @@ int sc_cmd_bench_spheres(int argc, char **argv)
                100 * (nops->mtri / gen->mtri - 1), gen->mtri, nops->mtri);
 
     int rc = 0;
-    if (csv && sc_cli_write_atomic(csv, write_csv, &b) != 0) {
-        sc_cli_error(CMD, "cannot write %s", csv);
+    if (a.csv && sc_cli_write(CMD, a.csv, write_csv, &b) != 0)
+        rc = 1;
+    if (rc == 0 && a.png && plot(&b, a.png) != 0) {
+        sc_cli_error(CMD, "gnuplot failed to write %s", a.png);
         rc = 1;
     }
-    if (png && plot(&b, png) != 0) {
-        sc_cli_error(CMD, "gnuplot failed to write %s", png);
-        rc = 1;
-    }
-    free(b.rows);
+    sc_bsph_free(&b);
     return rc;
 }
+
+const sc_cli_cmd sc_cli_bench_spheres = {
+    .name = "bench-spheres",
+    .operands = "",
+    .summary = "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error",
+    .details = "Throughput of the batch-sphere kernels (method x kind x ISA x precision) at L1-, L2-\n"
+               "and DRAM-sized working sets against a memcpy of the same bytes, reject-mask cost,\n"
+               "and each variant's centre error against MPFR.\n",
+    .opts = opts,
+    .nopts = SC_NAMES_COUNT(opts),
+    .run = run,
+};

@@ -7,8 +7,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "commands.h"
-#include "spherecull/sc_isa.h"
+#include "cli.h"
+#include "common/sc_names.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_image.h"
 #include "spherecull/sc_render.h"
@@ -16,58 +16,94 @@
 
 #define CMD "render"
 
-static void help(FILE *f)
-{
-    fprintf(f,
-            "usage: spherecull render SCENE [-o out.png] [options]\n"
-            "\n"
-            "Traces SCENE with the sphere-prefiltered BVH and writes an RGB PNG.\n"
-            "SCENE is a scenes/*.json file, a mesh file assimp reads (the camera frames it),\n"
-            "proc:sphere|soup|slivers|terrain:N, proc:grid:MESH:N or cache:NAME\n"
-            "(scripts/fetch-meshes.sh fills the mesh cache).\n"
-            "\n"
-            "  -o, --output FILE     PNG to write (default render.png); written atomically\n"
-            "  --width W, --height H image size (default: the scene's)\n"
-            "  --prefilter MODE      off | circum | minimal | auto (default auto)\n"
-            "  --leaf N              triangles per BVH leaf, 1..%d (default 8)\n"
-            "  --threads N           render threads (default: all)\n"
-            "  --isa ISA             auto | scalar | sse4 | avx2 | avx512: every kernel (default auto)\n"
-            "  --triangle TEST       watertight | moller | exact (default watertight)\n"
-            "  --ao N                ambient-occlusion samples per pixel (default 0)\n"
-            "  --seed S              seed for AO directions (default 1)\n"
-            "  --no-shadows          skip shadow rays\n"
-            "  --debug VIEW          normals | depth | id | heat (sphere tests per pixel)\n"
-            "  --stats               count and print per-ray traversal statistics\n"
-            "  --max-triangles N     refuse larger scenes (default %llu)\n"
-            "  -q, --quiet           no progress bar, no summary\n"
-            "  -h, --help            this text\n",
-            SC_BVH_MAX_LEAF, (unsigned long long)SC_SCENE_DEFAULT_MAX_TRIANGLES);
-}
+#define STR_(x) #x
+#define STR(x) STR_(x)
 
-static int parse_int(const char *s, long lo, long hi, long *out)
-{
-    if (!s || !*s)
-        return 0;
-    errno = 0;
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (errno || *end || v < lo || v > hi)
-        return 0;
-    *out = v;
-    return 1;
-}
+enum { O_OUT, O_WIDTH, O_HEIGHT, O_PREFILTER, O_LEAF, O_THREADS, O_ISA, O_TRIANGLE, O_AO, O_SEED, O_NO_SHADOWS,
+       O_DEBUG, O_STATS, O_MAX_TRIS, O_QUIET };
+static const sc_cli_opt opts[] = {
+    [O_OUT] = { "output", 'o', "FILE", "PNG to write, atomically", "render.png" },
+    [O_WIDTH] = { "width", 0, "W", "image width; one side given keeps the aspect", "the scene's" },
+    [O_HEIGHT] = { "height", 0, "H", "image height", "the scene's" },
+    [O_PREFILTER] = { "prefilter", 0, "MODE", "off|circum|minimal|auto", "auto" },
+    [O_LEAF] = { "leaf", 0, "N", "triangles per BVH leaf, 1.." STR(SC_BVH_MAX_LEAF), "8" },
+    [O_THREADS] = { "threads", 0, "N", "render threads", "all" },
+    [O_ISA] = { "isa", 0, "ISA", SC_CLI_ISA_VALUES, "auto" },
+    [O_TRIANGLE] = { "triangle", 0, "TEST", "watertight|moller|exact", "watertight" },
+    [O_AO] = { "ao", 0, "N", "ambient-occlusion samples per pixel", "0" },
+    [O_SEED] = { "seed", 0, "S", "seed for AO directions", "1" },
+    [O_NO_SHADOWS] = { "no-shadows", 0, NULL, "skip shadow rays", NULL },
+    [O_DEBUG] = { "debug", 0, "VIEW", "normals|depth|id|heat (sphere tests per pixel)", NULL },
+    [O_STATS] = { "stats", 0, NULL, "count and print per-ray traversal statistics", NULL },
+    [O_MAX_TRIS] = { "max-triangles", 0, "N", "refuse larger scenes", "50000000" },
+    [O_QUIET] = { "quiet", 'q', NULL, "no progress bar, no summary", NULL },
+};
 
-static int parse_u64(const char *s, unsigned long long *out)
+_Static_assert(SC_SCENE_DEFAULT_MAX_TRIANGLES == 50000000ull, "--max-triangles states the loader's default");
+
+typedef struct args {
+    const char *scene, *out;
+    long width, height, leaf, threads, ao;
+    unsigned long long seed, max_tris;
+    int stats, quiet, shadows;
+    sc_prefilter_mode prefilter;
+    sc_tri_test tri;
+    sc_render_debug debug;
+} args;
+
+static int on_option(void *ctx, int opt, const char *val)
 {
-    if (!s || !*s || *s == '-')
+    args *a = ctx;
+    const char *name = opt >= 0 ? opts[opt].name : "";
+    switch (opt) {
+    case -1:
+        if (a->scene) {
+            sc_cli_error(CMD, "more than one scene given ('%s' and '%s')", a->scene, val);
+            return 2;
+        }
+        a->scene = val;
         return 0;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (errno || *end)
+    case O_OUT:
+        if (!*val) {
+            sc_cli_error(CMD, "--output needs a file name");
+            return 2;
+        }
+        a->out = val;
         return 0;
-    *out = v;
-    return 1;
+    case O_WIDTH: return sc_cli_int(CMD, name, val, 1, SC_SCENE_MAX_IMAGE_SIDE, &a->width) ? 2 : 0;
+    case O_HEIGHT: return sc_cli_int(CMD, name, val, 1, SC_SCENE_MAX_IMAGE_SIDE, &a->height) ? 2 : 0;
+    case O_LEAF: return sc_cli_int(CMD, name, val, 1, SC_BVH_MAX_LEAF, &a->leaf) ? 2 : 0;
+    case O_THREADS: return sc_cli_int(CMD, name, val, 1, 1024, &a->threads) ? 2 : 0;
+    case O_AO: return sc_cli_int(CMD, name, val, 0, 4096, &a->ao) ? 2 : 0;
+    case O_SEED: return sc_cli_u64(CMD, name, val, &a->seed) ? 2 : 0;
+    case O_MAX_TRIS:
+        if (sc_cli_u64(CMD, name, val, &a->max_tris) != 0)
+            return 2;
+        if (a->max_tris == 0) {
+            sc_cli_error(CMD, "--max-triangles takes a positive integer");
+            return 2;
+        }
+        return 0;
+    case O_PREFILTER:
+        if (sc_prefilter_mode_from_name(val, &a->prefilter) == SC_OK)
+            return 0;
+        break;
+    case O_ISA:
+        return sc_cli_isa(CMD, val);
+    case O_TRIANGLE:
+        if (sc_tri_test_from_name(val, &a->tri) == SC_OK)
+            return 0;
+        break;
+    case O_DEBUG:
+        if (sc_render_debug_from_name(val, &a->debug) == SC_OK && a->debug != SC_RENDER_SHADED)
+            return 0;
+        break;
+    case O_NO_SHADOWS: a->shadows = 0; return 0;
+    case O_STATS: a->stats = 1; return 0;
+    case O_QUIET: a->quiet = 1; return 0;
+    }
+    sc_cli_error(CMD, "--%s takes %s, not '%s'", name, opts[opt].help, val);
+    return 2;
 }
 
 static void on_warning(void *ctx, const char *msg)
@@ -88,114 +124,24 @@ static void on_progress(void *ctx, double f)
     fflush(stderr);
 }
 
-int sc_cmd_render(int argc, char **argv)
+static int run(int argc, char **argv)
 {
-    const char *scene_path = NULL, *out_path = "render.png";
-    long width = 0, height = 0, leaf = 8, threads = 0, ao = 0;
-    unsigned long long seed = 1, max_tris = 0;
-    int stats_on = 0, quiet = 0, shadows = 1;
-    sc_prefilter_mode prefilter = SC_PREFILTER_AUTO;
-    int isa = -1;   /* auto: SPHERECULL_ISA or the widest level */
-    sc_tri_test tri = SC_TRI_WATERTIGHT;
-    sc_render_debug debug = SC_RENDER_SHADED;
-
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *val = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            help(stdout);
-            return 0;
-        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!val || !*val) {
-                sc_cli_error(CMD, "%s needs a file name", a);
-                return 2;
-            }
-            out_path = val, i++;
-        } else if (!strcmp(a, "--width") || !strcmp(a, "--height")) {
-            long v;
-            if (!parse_int(val, 1, SC_SCENE_MAX_IMAGE_SIDE, &v)) {
-                sc_cli_error(CMD, "%s needs a whole number of pixels in 1..%d", a, SC_SCENE_MAX_IMAGE_SIDE);
-                return 2;
-            }
-            *(a[2] == 'w' ? &width : &height) = v, i++;
-        } else if (!strcmp(a, "--prefilter")) {
-            if (!val || sc_prefilter_mode_from_name(val, &prefilter) != SC_OK) {
-                sc_cli_error(CMD, "--prefilter takes off, circum, minimal or auto");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--leaf")) {
-            if (!parse_int(val, 1, SC_BVH_MAX_LEAF, &leaf)) {
-                sc_cli_error(CMD, "--leaf takes a number in 1..%d", SC_BVH_MAX_LEAF);
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--threads")) {
-            if (!parse_int(val, 1, 1024, &threads)) {
-                sc_cli_error(CMD, "--threads takes a number in 1..1024");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--isa")) {
-            if (!val || sc_cli_parse_isa(val, &isa) != 0) {
-                sc_cli_error(CMD, "--isa takes auto, scalar, sse4, avx2 or avx512");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--triangle")) {
-            if (!val || sc_tri_test_from_name(val, &tri) != SC_OK) {
-                sc_cli_error(CMD, "--triangle takes watertight, moller or exact");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--ao")) {
-            if (!parse_int(val, 0, 4096, &ao)) {
-                sc_cli_error(CMD, "--ao takes a number of samples in 0..4096");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--seed")) {
-            if (!parse_u64(val, &seed)) {
-                sc_cli_error(CMD, "--seed takes a non-negative integer");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--max-triangles")) {
-            if (!parse_u64(val, &max_tris) || max_tris == 0) {
-                sc_cli_error(CMD, "--max-triangles takes a positive integer");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--debug")) {
-            if (!val || sc_render_debug_from_name(val, &debug) != SC_OK || debug == SC_RENDER_SHADED) {
-                sc_cli_error(CMD, "--debug takes normals, depth, id or heat");
-                return 2;
-            }
-            i++;
-        } else if (!strcmp(a, "--stats")) {
-            stats_on = 1;
-        } else if (!strcmp(a, "--no-shadows")) {
-            shadows = 0;
-        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-            quiet = 1;
-        } else if (a[0] == '-' && a[1]) {
-            sc_cli_error(CMD, "unknown option '%s' (try --help)", a);
-            return 2;
-        } else if (!scene_path) {
-            scene_path = a;
-        } else {
-            sc_cli_error(CMD, "more than one scene given ('%s' and '%s')", scene_path, a);
-            return 2;
-        }
-    }
-    if (!scene_path) {
+    args a = { .out = "render.png", .leaf = 8, .seed = 1, .shadows = 1, .prefilter = SC_PREFILTER_AUTO,
+               .tri = SC_TRI_WATERTIGHT, .debug = SC_RENDER_SHADED };
+    int rc = sc_cli_parse(&sc_cli_render, argc, argv, on_option, &a);
+    if (rc)
+        return rc < 0 ? 0 : rc;
+    if (!a.scene) {
         sc_cli_error(CMD, "no scene given (try --help)");
         return 2;
     }
-    if (isa >= 0 && sc_isa_force((sc_isa)isa) != SC_OK) {
-        sc_cli_error(CMD, "this CPU cannot run the %s kernels", sc_isa_name((sc_isa)isa));
-        return 1;
-    }
+    const char *scene_path = a.scene, *out_path = a.out;
+    long width = a.width, height = a.height, leaf = a.leaf, threads = a.threads, ao = a.ao;
+    unsigned long long seed = a.seed, max_tris = a.max_tris;
+    int stats_on = a.stats, quiet = a.quiet, shadows = a.shadows;
+    sc_prefilter_mode prefilter = a.prefilter;
+    sc_tri_test tri = a.tri;
+    sc_render_debug debug = a.debug;
 
     sc_scene_options so;
     sc_scene_options_init(&so);
@@ -304,3 +250,16 @@ int sc_cmd_render(int argc, char **argv)
     sc_scene_free(scene);
     return 0;
 }
+
+const sc_cli_cmd sc_cli_render = {
+    .name = "render",
+    .operands = "SCENE",
+    .summary = "trace a scene to a PNG: Lambert, shadows, AO, debug views",
+    .details = "Traces SCENE with the sphere-prefiltered BVH and writes an RGB PNG.\n"
+               "SCENE is a scenes/*.json file, a mesh file assimp reads (the camera frames it),\n"
+               "proc:sphere|soup|slivers|terrain:N, proc:grid:MESH:N or cache:NAME\n"
+               "(scripts/fetch-meshes.sh fills the mesh cache).\n",
+    .opts = opts,
+    .nopts = SC_NAMES_COUNT(opts),
+    .run = run,
+};

@@ -1,112 +1,34 @@
-/* spherecull — command-line front end. */
-#define _POSIX_C_SOURCE 200809L
-#include <errno.h>
-#include <stdarg.h>
+/* spherecull — command-line front end: finds the command and hands it
+ * argv; 'help CMD' and '--version' are answered here. */
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
-#include "commands.h"
-#include "spherecull/sc_isa.h"
+#include "cli.h"
 
-/* One row per subcommand; each subsystem adds its own. */
-static const sc_command commands[] = {
-    { "accuracy", "circumsphere accuracy of every method against MPFR", sc_cmd_accuracy },
-    { "bench", "tracer Mrays/s per prefilter mode and leaf size, against Embree on the same rays", sc_cmd_bench },
-    { "bench-spheres", "SIMD batch-sphere and reject-mask throughput vs memcpy, speed vs error", sc_cmd_bench_spheres },
-    { "compare", "every tracer vs an exact oracle: speed, disagreements, prefilter work", sc_cmd_compare },
-    { "raster", "rasterize a scene offscreen (OSMesa): preview, triangle IDs, depth", sc_cmd_raster },
-    { "raster-check", "raster ID buffer vs tracer primary hits: agreement, map, overlay", sc_cmd_raster_check },
-    { "render", "trace a scene to a PNG: Lambert, shadows, AO, debug views", sc_cmd_render },
+#ifndef SPHERECULL_VERSION
+#error "SPHERECULL_VERSION comes from project(VERSION) in CMakeLists.txt"
+#endif
+
+static const sc_cli_cmd *const commands[] = {
+    &sc_cli_accuracy, &sc_cli_bench, &sc_cli_bench_spheres, &sc_cli_compare,
+    &sc_cli_raster, &sc_cli_raster_check, &sc_cli_render,
 };
+enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
-void sc_cli_error(const char *command, const char *fmt, ...)
+static const sc_cli_cmd *find(const char *name)
 {
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "spherecull: %s: ", command);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
-    va_end(ap);
-}
-
-int sc_cli_check_output(const char *command, const char *option, const char *path)
-{
-    if (!path)
-        return 0;
-    struct stat st;
-    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        sc_cli_error(command, "%s '%s': not a regular file", option, path);
-        return -1;
-    }
-    const char *slash = strrchr(path, '/');
-    size_t dlen = slash ? (size_t)(slash - path) : 1;
-    char *probe = malloc(dlen + 32);
-    if (!probe) {
-        sc_cli_error(command, "out of memory");
-        return -1;
-    }
-    if (slash)
-        snprintf(probe, dlen + 32, "%.*s/.spherecull-probe-XXXXXX", (int)(dlen ? dlen : 1), dlen ? path : "/");
-    else
-        snprintf(probe, dlen + 32, "./.spherecull-probe-XXXXXX");
-    int fd = mkstemp(probe);
-    if (fd < 0) {
-        sc_cli_error(command, "%s '%s': cannot write there: %s", option, path, strerror(errno));
-        free(probe);
-        return -1;
-    }
-    close(fd);
-    unlink(probe);
-    free(probe);
-    return 0;
-}
-
-int sc_cli_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
-{
-    /* Never rename over a device, pipe or directory (-o /dev/null would
-     * replace the device node): refuse any existing non-regular target. */
-    struct stat st;
-    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-        errno = S_ISDIR(st.st_mode) ? EISDIR : EINVAL;
-        return -1;
-    }
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 16);
-    if (!tmp)
-        return -1;
-    snprintf(tmp, len + 16, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        free(tmp);
-        return -1;
-    }
-    FILE *f = fdopen(fd, "wb");
-    int ok = f && write_fn(ctx, f) == 0;
-    if (f) {
-        ok = ok && fflush(f) == 0 && !ferror(f);
-        ok = (fclose(f) == 0) && ok;
-    } else {
-        close(fd);
-    }
-    if (ok)
-        ok = rename(tmp, path) == 0;
-    if (!ok) {
-        int saved = errno;
-        unlink(tmp);
-        errno = saved;
-    }
-    free(tmp);
-    return ok ? 0 : -1;
+    for (int i = 0; i < NCOMMANDS; i++)
+        if (strcmp(name, commands[i]->name) == 0)
+            return commands[i];
+    return NULL;
 }
 
 static void usage(FILE *out)
 {
-    fprintf(out, "usage: spherecull <command> [options]\n\ncommands:\n");
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(out, "  %-14s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "usage: spherecull <command> [options]\n       spherecull help <command>\n"
+                 "       spherecull --version\n\ncommands:\n");
+    for (int i = 0; i < NCOMMANDS; i++)
+        fprintf(out, "  %-14s %s\n", commands[i]->name, commands[i]->summary);
     fprintf(out, "\n'spherecull <command> --help' describes one command.\n");
 }
 
@@ -116,26 +38,27 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
-        usage(stdout);
+    const char *a = argv[1];
+    if (strcmp(a, "--version") == 0 || strcmp(a, "-V") == 0) {
+        printf("spherecull %s\n", SPHERECULL_VERSION);
         return 0;
     }
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (strcmp(argv[1], commands[i].name) == 0)
-            return commands[i].run(argc - 1, argv + 1);
-    fprintf(stderr, "spherecull: unknown command '%s' (try 'spherecull --help')\n", argv[1]);
+    if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0 || strcmp(a, "help") == 0) {
+        if (argc < 3) {
+            usage(stdout);
+            return 0;
+        }
+        const sc_cli_cmd *c = find(argv[2]);
+        if (!c) {
+            fprintf(stderr, "spherecull: help: unknown command '%s' (try 'spherecull --help')\n", argv[2]);
+            return 2;
+        }
+        sc_cli_help(c, stdout);
+        return 0;
+    }
+    const sc_cli_cmd *c = find(a);
+    if (c)
+        return c->run(argc - 1, argv + 1);
+    fprintf(stderr, "spherecull: unknown command '%s' (try 'spherecull --help')\n", a);
     return 2;
-}
-
-int sc_cli_parse_isa(const char *name, int *isa)
-{
-    sc_isa v;
-    if (name && strcmp(name, "auto") == 0) {
-        *isa = -1;
-        return 0;
-    }
-    if (sc_isa_from_name(name, &v) != SC_OK)
-        return -1;
-    *isa = (int)v;
-    return 0;
 }

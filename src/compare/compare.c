@@ -1,273 +1,17 @@
 /* The comparison driver (see compare.h). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include <cjson/cJSON.h>
 
+#include "common/sc_clock.h"
+#include "common/sc_csv.h"
 #include "compare.h"
 #include "crossing.h"
 #include "oracle.h"
-
-#ifdef SC_HAVE_TRACE
-#include "spherecull/sc_bvh.h"
-#include "spherecull/sc_trace.h"
-#endif
-#ifdef SC_HAVE_EMBREE
-#include "spherecull/sc_embree.h"
-#endif
-
-/* ---- the tracer table ----------------------------------------------------- */
-
-typedef enum family { FAM_SPHERECULL, FAM_EMBREE } family;
-
-typedef struct tracer_def {
-    const char *name;
-    family fam;
-    int mode;          /* sc_prefilter_mode or sc_embree_mode */
-    int quality;       /* embree: build quality; spherecull: sc_tri_test */
-    int cluster;       /* embree user modes */
-    int packet;        /* 0, 8 or 16 */
-} tracer_def;
-
-static const tracer_def all_tracers[] = {
-#ifdef SC_HAVE_TRACE
-    { "spherecull-off", FAM_SPHERECULL, SC_PREFILTER_OFF, 0, 0, 0 },
-    { "spherecull-exact", FAM_SPHERECULL, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0 },
-    { "spherecull-circum", FAM_SPHERECULL, SC_PREFILTER_CIRCUM, 0, 0, 0 },
-    { "spherecull-minimal", FAM_SPHERECULL, SC_PREFILTER_MINIMAL, 0, 0, 0 },
-    { "spherecull-auto", FAM_SPHERECULL, SC_PREFILTER_AUTO, 0, 0, 0 },
-#endif
-#ifdef SC_HAVE_EMBREE
-    { "embree", FAM_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
-    { "embree-robust", FAM_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
-    { "embree-high", FAM_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0 },
-    { "embree-robust-high", FAM_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0 },
-    { "embree-p8", FAM_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8 },
-    { "embree-p16", FAM_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16 },
-    { "embree-user-prefilter", FAM_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
-    { "embree-user-prefilter16", FAM_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
-    { "embree-user-plain", FAM_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
-    { "embree-user-plain16", FAM_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
-#endif
-    { NULL, FAM_SPHERECULL, 0, 0, 0, 0 }
-};
-enum { NDEFS = sizeof all_tracers / sizeof all_tracers[0] - 1 };
-
-const char *const *sc_cmp_tracer_names(int *count)
-{
-    static const char *names[NDEFS + 1];
-    for (int i = 0; i < NDEFS; i++)
-        names[i] = all_tracers[i].name;
-    names[NDEFS] = NULL;
-    if (count)
-        *count = NDEFS;
-    return names;
-}
-
-typedef struct tracer {
-    const tracer_def *def;
-    void *handle;
-    double bytes_per_tri;
-    int prefilter;        /* has sphere statistics */
-    int counted;          /* counts triangle tests */
-    int fp_exact;         /* false positives are counted exactly */
-} tracer;
-
-static sc_status tracer_build(tracer *t, const tracer_def *def, const sc_checked_mesh *checked)
-{
-    const sc_mesh_view *m = &checked->view;
-    memset(t, 0, sizeof *t);
-    t->def = def;
-    if (def->fam == FAM_SPHERECULL) {
-#ifdef SC_HAVE_TRACE
-        sc_bvh_config cfg;
-        sc_bvh_config_default(&cfg);
-        cfg.prefilter = (sc_prefilter_mode)def->mode;
-        cfg.tri_test = (sc_tri_test)def->quality;
-        sc_bvh *b;
-        sc_status st = sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &b);
-        if (st != SC_OK)
-            return st;
-        sc_bvh_info info;
-        sc_bvh_get_info(b, &info);
-        t->handle = b;
-        t->bytes_per_tri = (double)info.total_bytes / m->triangle_count;
-        t->prefilter = def->mode != SC_PREFILTER_OFF;
-        t->counted = 1;
-        /* auto mixes leaves with and without spheres: the counters cannot
-         * tell which triangle tests followed a passed sphere */
-        t->fp_exact = def->mode == SC_PREFILTER_CIRCUM || def->mode == SC_PREFILTER_MINIMAL;
-        return SC_OK;
-#else
-        return SC_ERR_UNSUPPORTED;
-#endif
-    }
-#ifdef SC_HAVE_EMBREE
-    sc_embree_config cfg;
-    sc_embree_config_default(&cfg);
-    cfg.mode = (sc_embree_mode)def->mode;
-    cfg.quality = (sc_embree_quality)def->quality;
-    if (def->cluster)
-        cfg.cluster_size = def->cluster;
-    sc_embree *e;
-    sc_status st = sc_embree_create(checked, &cfg, &e);
-    if (st != SC_OK)
-        return st;
-    sc_embree_info info;
-    sc_embree_get_info(e, &info);
-    t->handle = e;
-    t->bytes_per_tri = (double)(info.embree_bytes + info.ours_bytes) / m->triangle_count;
-    t->prefilter = def->mode == SC_EMBREE_USER_PREFILTER;
-    t->counted = def->mode == SC_EMBREE_USER_PREFILTER || def->mode == SC_EMBREE_USER_PLAIN;
-    t->fp_exact = t->prefilter;
-    return SC_OK;
-#else
-    (void)m;
-    return SC_ERR_UNSUPPORTED;
-#endif
-}
-
-static void tracer_free(tracer *t)
-{
-    if (!t->handle)
-        return;
-#ifdef SC_HAVE_TRACE
-    if (t->def->fam == FAM_SPHERECULL)
-        sc_bvh_free(t->handle);
-#endif
-#ifdef SC_HAVE_EMBREE
-    if (t->def->fam == FAM_EMBREE)
-        sc_embree_destroy(t->handle);
-#endif
-    t->handle = NULL;
-}
-
-/* Closest hits (occ == NULL) or occlusion (occ != NULL) for rays[0..n). */
-static sc_status tracer_run(const tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
-                            sc_cmp_counters *ctr)
-{
-#ifdef SC_HAVE_TRACE
-    if (t->def->fam == FAM_SPHERECULL) {
-        sc_trace_stats ts, *tsp = NULL;
-        if (ctr) {
-            memset(&ts, 0, sizeof ts);
-            tsp = &ts;
-        }
-        for (size_t i = 0; i < n; i++) {
-            sc_status st;
-            if (occ) {
-                int o = 0;
-                st = sc_trace_any(t->handle, &rays[i], &o, tsp);
-                occ[i] = (uint8_t)o;
-            } else {
-                st = sc_trace_closest(t->handle, &rays[i], &hits[i], tsp);
-            }
-            if (st != SC_OK)
-                return st;
-        }
-        if (ctr) {
-            ctr->rays += n;
-            ctr->sphere_tests += ts.sphere_tests;
-            ctr->sphere_rejects += ts.sphere_rejects;
-            ctr->tri_tests += ts.tri_tests;
-            ctr->tri_hits += ts.tri_hits;
-            /* every exact test in a sphere leaf follows a passed sphere;
-             * exact only when all leaves carry spheres (circum, minimal) */
-            if (t->def->mode == SC_PREFILTER_CIRCUM || t->def->mode == SC_PREFILTER_MINIMAL)
-                ctr->false_positives += ts.tri_tests - ts.tri_hits;
-        }
-        return SC_OK;
-    }
-#endif
-#ifdef SC_HAVE_EMBREE
-    if (t->def->fam == FAM_EMBREE) {
-        sc_embree_counters ec, *ecp = NULL;
-        if (ctr) {
-            memset(&ec, 0, sizeof ec);
-            ecp = &ec;
-        }
-        sc_status st;
-        if (occ)
-            st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);
-        else if (t->def->packet)
-            st = sc_embree_intersect_packets(t->handle, t->def->packet, rays, n, hits, ecp);
-        else
-            st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
-        if (st == SC_OK && ctr) {
-            ctr->rays += n;
-            ctr->sphere_tests += ec.sphere_tests;
-            ctr->sphere_rejects += ec.sphere_rejects;
-            ctr->tri_tests += ec.tri_tests;
-            ctr->tri_hits += ec.tri_hits;
-            ctr->false_positives += ec.false_positives;
-        }
-        return st;
-    }
-#endif
-    (void)rays, (void)n, (void)hits, (void)occ, (void)ctr;
-    return SC_ERR_UNSUPPORTED;
-}
-
-/* ---- threaded timing ------------------------------------------------------ */
-
-enum { CHUNK = 1024 };   /* a multiple of every packet width */
-
-typedef struct pool_job {
-    const tracer *t;
-    const sc_ray *rays;
-    size_t n;
-    sc_hitrec *hits;
-    uint8_t *occ;
-    atomic_size_t next;
-    atomic_int failed;
-} pool_job;
-
-static void *pool_worker(void *arg)
-{
-    pool_job *j = arg;
-    for (;;) {
-        size_t b = atomic_fetch_add(&j->next, CHUNK);
-        if (b >= j->n)
-            break;
-        size_t e = b + CHUNK < j->n ? b + CHUNK : j->n;
-        if (tracer_run(j->t, j->rays + b, e - b, j->occ ? NULL : j->hits + b, j->occ ? j->occ + b : NULL,
-                       NULL) != SC_OK)
-            atomic_store(&j->failed, 1);
-    }
-    return NULL;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static sc_status timed_run(const tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
-                           int threads, double *seconds)
-{
-    pool_job j;
-    j.t = t, j.rays = rays, j.n = n, j.hits = hits, j.occ = occ;
-    atomic_init(&j.next, 0);
-    atomic_init(&j.failed, 0);
-    pthread_t tid[SC_CMP_MAX_THREADS];
-    int started[SC_CMP_MAX_THREADS] = { 0 };
-    double t0 = now_s();
-    for (int k = 1; k < threads; k++)
-        started[k] = pthread_create(&tid[k], NULL, pool_worker, &j) == 0;
-    pool_worker(&j);
-    for (int k = 1; k < threads; k++)
-        if (started[k])
-            pthread_join(tid[k], NULL);
-    *seconds = now_s() - t0;
-    return atomic_load(&j.failed) ? SC_ERR_INVALID_ARGUMENT : SC_OK;
-}
+#include "tracer.h"
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -352,7 +96,7 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
                 a->hole_rays++;
                 a->holes += v == SC_VERDICT_HOLE;
             }
-            if (o->hit && o->first_kind == SC_XK_TOUCH) {
+            if (o->hit && o->first_kind == SC_CROSS_TOUCH) {
                 a->graze_rays++;
                 a->grazes_missed += v == SC_VERDICT_GRAZE_MISSED;
             }
@@ -378,7 +122,237 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
     free(terr);
 }
 
-sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *view, const sc_camera *camera,
+/* One scene's comparison: the tracers, the ray sets, and the buffers every
+ * set is traced into. */
+typedef struct cmp_run {
+    const char *scene;
+    sc_checked_mesh mesh;        /* checked once, trusted from here on */
+    const sc_cmp_options *opt;
+    FILE *log;
+    char *err;
+    size_t errlen;
+    int closed;
+    sc_tracer tr[SC_CMP_MAX_TRACERS];
+    int ntr;
+    sc_rayset sets[SC_RAYS_KIND_COUNT];
+    sc_hitrec *hits;
+    uint8_t *occ;
+    size_t *sample;          /* oracle sample: indices into the set */
+    sc_ray *srays;           /* and its rays */
+} cmp_run;
+
+static void run_free(cmp_run *r)
+{
+    for (int k = 0; k < SC_RAYS_KIND_COUNT; k++)
+        sc_rayset_free(&r->sets[k]);
+    for (int i = 0; i < r->ntr; i++)
+        sc_tracer_free(&r->tr[i]);
+    free(r->hits), free(r->occ), free(r->sample), free(r->srays);
+}
+
+static sc_status fail(cmp_run *r, sc_status st, const char *what)
+{
+    if (r->err)
+        snprintf(r->err, r->errlen, "%s: %s: %s", r->scene, what, sc_strerror(st));
+    return st;
+}
+
+static sc_status build_tracers(cmp_run *r)
+{
+    int n;
+    const char *const *names = sc_tracer_names(&n);
+    for (int d = 0; d < n && r->ntr < SC_CMP_MAX_TRACERS; d++) {
+        if (!wanted(r->opt, names[d]))
+            continue;
+        double t0 = sc_now_seconds();
+        sc_status st = sc_tracer_build(&r->tr[r->ntr], sc_tracer_find(names[d]), &r->mesh);
+        if (st != SC_OK) {
+            if (r->log) fprintf(r->log, "  %s: build failed: %s (skipped)\n", names[d], sc_strerror(st));
+            continue;
+        }
+        if (r->log) fprintf(r->log, "  built %-24s %6.2f s  %.0f B/tri\n", names[d], sc_now_seconds() - t0,
+                            r->tr[r->ntr].bytes_per_tri);
+        r->ntr++;
+    }
+    if (r->ntr == 0) {
+        if (r->err) snprintf(r->err, r->errlen, "no tracer available (names: see --help)");
+        return SC_ERR_UNSUPPORTED;
+    }
+    return SC_OK;
+}
+
+/* Shadow and diffuse rays start at primary hits. They come from one fixed
+ * tracer (the first single-ray one of the table: ours) so the sets do not
+ * depend on which tracers were asked for. */
+static sc_status secondary_rays(cmp_run *r, const float light[3])
+{
+    const sc_rayset *prim = &r->sets[SC_RAYS_PRIMARY];
+    const sc_tracer_def *rd = NULL;
+    int n;
+    const char *const *names = sc_tracer_names(&n);
+    for (int d = 0; d < n && !rd; d++)
+        if (!sc_tracer_find(names[d])->packet)
+            rd = sc_tracer_find(names[d]);
+    sc_hitrec *ref_hits = malloc((prim->count ? prim->count : 1) * sizeof *ref_hits);
+    sc_tracer reft;
+    if (!rd || !ref_hits || sc_tracer_build(&reft, rd, &r->mesh) != SC_OK) {
+        free(ref_hits);
+        if (r->err) snprintf(r->err, r->errlen, "%s: no reference tracer for shadow rays", r->scene);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    sc_status st = sc_tracer_run(&reft, prim->rays, prim->count, ref_hits, NULL, NULL);
+    sc_tracer_free(&reft);
+    if (st == SC_OK)
+        st = sc_rayset_shadow(&r->mesh, prim, ref_hits, light, &r->sets[SC_RAYS_SHADOW]);
+    if (st == SC_OK)
+        st = sc_rayset_diffuse(&r->mesh, prim, ref_hits, r->opt->seed, &r->sets[SC_RAYS_DIFFUSE]);
+    free(ref_hits);
+    if (st != SC_OK)
+        return fail(r, st, "shadow/diffuse rays");
+    if (r->log) fprintf(r->log, "  shadow/diffuse origins from %s's primary hits\n", rd->name);
+    return SC_OK;
+}
+
+static sc_status make_rays(cmp_run *r, const sc_camera *camera, const float light[3])
+{
+    const sc_cmp_options *opt = r->opt;
+    /* Primary rays at the requested width, the camera's aspect kept. */
+    sc_camera cam = *camera;
+    cam.width = opt->width;
+    cam.height = opt->height > 0 ? opt->height
+                                 : (int)lround((double)opt->width * camera->height / camera->width);
+    if (cam.height < 1) cam.height = 1;
+    sc_status st = sc_rayset_primary(&cam, &r->sets[SC_RAYS_PRIMARY]);
+    if (st != SC_OK)
+        return fail(r, st, "primary rays");
+    if (opt->ray_kinds & ((1u << SC_RAYS_SHADOW) | (1u << SC_RAYS_DIFFUSE)))
+        if ((st = secondary_rays(r, light)) != SC_OK)
+            return st;
+    if ((st = sc_rayset_random(r->mesh.lo, r->mesh.hi, opt->random_rays ? opt->random_rays : 1, opt->seed,
+                               &r->sets[SC_RAYS_RANDOM])) != SC_OK ||
+        (st = sc_rayset_adversarial(&r->mesh, opt->adversarial_rays ? opt->adversarial_rays : 1, opt->seed,
+                                    &r->sets[SC_RAYS_ADVERSARIAL])) != SC_OK)
+        return fail(r, st, "random/adversarial rays");
+    size_t maxn = 1;
+    for (int k = 0; k < SC_RAYS_KIND_COUNT; k++)
+        if (r->sets[k].count > maxn)
+            maxn = r->sets[k].count;
+    r->hits = malloc(maxn * sizeof *r->hits);
+    r->occ = malloc(maxn);
+    r->sample = malloc(maxn * sizeof *r->sample);
+    r->srays = malloc(maxn * sizeof *r->srays);
+    return r->hits && r->occ && r->sample && r->srays ? SC_OK : SC_ERR_OUT_OF_MEMORY;
+}
+
+/* One row per thread count: the median of the timed repeats beside the
+ * accuracy and the work counters of the checking run. */
+static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy *acc, const sc_tracer_counters *ctr,
+                          sc_cmp_rows *out)
+{
+    const sc_cmp_options *opt = r->opt;
+    const sc_rayset *set = &r->sets[k];
+    uint8_t *occ = k == SC_RAYS_SHADOW ? r->occ : NULL;
+    for (int th = 0; th < opt->nthreads; th++) {
+        double times[64];
+        int reps = opt->repeats < 64 ? opt->repeats : 64;
+        for (int i = 0; i < reps; i++) {
+            sc_status st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &times[i]);
+            if (st != SC_OK)
+                return st;
+        }
+        qsort(times, (size_t)reps, sizeof times[0], cmp_double);
+        sc_cmp_row *row = row_add(out);
+        if (!row)
+            return SC_ERR_OUT_OF_MEMORY;
+        snprintf(row->scene, sizeof row->scene, "%s", r->scene);
+        row->triangles = r->mesh.view.triangle_count;
+        row->closed = r->closed;
+        row->rays = (sc_rayset_kind)k;
+        row->nrays = set->count;
+        snprintf(row->tracer, sizeof row->tracer, "%s", t->def.name);
+        row->threads = opt->threads[th];
+        row->mrays_per_s = (double)set->count / times[reps / 2] / 1e6;
+        row->speed_vs_embree = NAN;
+        row->oracle_rays = acc->oracle_rays;
+        row->hit_miss_disagree = acc->hit_miss;
+        row->primid_disagree = acc->primid;
+        row->holes = acc->holes;
+        row->hole_rays = acc->hole_rays;
+        row->grazes_missed = acc->grazes_missed;
+        row->graze_rays = acc->graze_rays;
+        row->t_err_median = acc->t_med;
+        row->t_err_max = acc->t_max;
+        row->bytes_per_tri = t->bytes_per_tri;
+        row->has_prefilter_stats = t->prefilter;
+        double nr = ctr->rays ? (double)ctr->rays : 1;
+        row->sphere_tests_per_ray = t->prefilter ? (double)ctr->sphere_tests / nr : NAN;
+        row->sphere_reject_rate = t->prefilter && ctr->sphere_tests
+                                      ? (double)ctr->sphere_rejects / (double)ctr->sphere_tests : NAN;
+        uint64_t passed = ctr->sphere_tests - ctr->sphere_rejects;
+        row->false_positive_rate = t->fp_exact && passed ? (double)ctr->false_positives / (double)passed : NAN;
+        row->tri_tests_per_ray = t->counted ? (double)ctr->tri_tests / nr : NAN;
+    }
+    return SC_OK;
+}
+
+/* One ray set: the oracle on an even sample, then every tracer checked
+ * against it and timed. */
+static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
+{
+    const sc_cmp_options *opt = r->opt;
+    const sc_rayset *set = &r->sets[k];
+    /* An even stride through the set: every region of the image or kind of
+     * adversarial ray is represented. */
+    size_t ns = opt->oracle_rays < set->count ? opt->oracle_rays : set->count;
+    for (size_t s = 0; s < ns; s++) {
+        r->sample[s] = (size_t)((double)s * set->count / ns);
+        r->srays[s] = set->rays[r->sample[s]];
+    }
+    sc_oracle orc;
+    double t0 = sc_now_seconds();
+    sc_status st = sc_oracle_run(&r->mesh, r->srays, ns, opt->oracle_threads,
+                                 k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
+    if (st != SC_OK)
+        return fail(r, st, "oracle");
+    size_t ohits = 0;
+    for (size_t s = 0; s < ns; s++)
+        ohits += (size_t)orc.hits[s].hit;
+    if (r->log)
+        fprintf(r->log, "  %-11s %7zu rays; oracle %zu rays (%zu hit) %.1f s, %.1f exact calls/ray\n",
+                sc_rayset_kind_name((sc_rayset_kind)k), set->count, ns, ohits, sc_now_seconds() - t0,
+                ns ? (double)orc.exact_calls / (double)ns : 0);
+    int shadow = k == SC_RAYS_SHADOW;
+    for (int ti = 0; ti < r->ntr && st == SC_OK; ti++) {
+        const sc_tracer *t = &r->tr[ti];
+        if (shadow && t->def.packet)
+            continue;                      /* packets here are closest-hit only */
+        sc_tracer_counters ctr;
+        memset(&ctr, 0, sizeof ctr);
+        st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
+        if (st != SC_OK) {
+            if (r->err)
+                snprintf(r->err, r->errlen, "%s: %s failed: %s", r->scene, t->def.name, sc_strerror(st));
+            break;
+        }
+        accuracy acc;
+        score(set, r->sample, &orc, r->hits, shadow ? r->occ : NULL, k == SC_RAYS_ADVERSARIAL, &acc);
+        st = add_rows(r, k, t, &acc, &ctr, out);
+    }
+    sc_oracle_free(&orc);
+    return st;
+}
+
+/* Speed against native Embree (rtcIntersect1 / rtcOccluded1), same set and threads. */
+static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
+{
+    for (size_t i = first_row; i < out->count; i++)
+        for (size_t j = first_row; j < out->count; j++)
+            if (strcmp(out->rows[j].tracer, "embree") == 0 && out->rows[j].rays == out->rows[i].rays &&
+                out->rows[j].threads == out->rows[i].threads)
+                out->rows[i].speed_vs_embree = out->rows[i].mrays_per_s / out->rows[j].mrays_per_s;
+}
+
+sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
                        const float light[3], const sc_cmp_options *opt, sc_cmp_rows *out, FILE *log,
                        char *err, size_t errlen)
 {
@@ -390,206 +364,23 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *view, const s
     for (int k = 0; k < opt->nthreads; k++)
         if (opt->threads[k] < 1 || opt->threads[k] > SC_CMP_MAX_THREADS)
             return SC_ERR_INVALID_ARGUMENT;
-    sc_checked_mesh checked;
-    const sc_checked_mesh *mesh = &checked;
-    sc_status st = sc_mesh_check(view, &checked);
+    cmp_run r;
+    memset(&r, 0, sizeof r);
+    r.scene = scene_name, r.opt = opt, r.log = log, r.err = err, r.errlen = errlen;
+    sc_status st = sc_mesh_check(mesh, &r.mesh);
     if (st != SC_OK) {
         if (err) snprintf(err, errlen, "%s: bad mesh: %s", scene_name, sc_strerror(st));
         return st;
     }
-    int closed = 0;
-    sc_mesh_is_closed(mesh, &closed);
-
-    tracer tr[NDEFS > 0 ? NDEFS : 1];
-    int ntr = 0;
-    for (int d = 0; d < NDEFS; d++) {
-        if (!wanted(opt, all_tracers[d].name))
-            continue;
-        double t0 = now_s();
-        st = tracer_build(&tr[ntr], &all_tracers[d], mesh);
-        if (st != SC_OK) {
-            if (log) fprintf(log, "  %s: build failed: %s (skipped)\n", all_tracers[d].name, sc_strerror(st));
-            continue;
-        }
-        if (log) fprintf(log, "  built %-24s %6.2f s  %.0f B/tri\n", all_tracers[d].name, now_s() - t0,
-                         tr[ntr].bytes_per_tri);
-        ntr++;
-    }
-    if (ntr == 0) {
-        if (err) snprintf(err, errlen, "no tracer available (names: see --help)");
-        return SC_ERR_UNSUPPORTED;
-    }
-
-    /* Primary rays at the requested width, the camera's aspect kept. */
-    sc_camera cam = *camera;
-    cam.width = opt->width;
-    cam.height = opt->height > 0 ? opt->height
-                                 : (int)lround((double)opt->width * camera->height / camera->width);
-    if (cam.height < 1) cam.height = 1;
-    sc_rayset sets[SC_RAYS_KIND_COUNT];
-    memset(sets, 0, sizeof sets);
-    sc_hitrec *hits = NULL, *ref_hits = NULL;
-    uint8_t *occ = NULL;
-    size_t *sample = NULL;
-    sc_ray *srays = NULL;
-    st = sc_rayset_primary(&cam, &sets[SC_RAYS_PRIMARY]);
-    if (st != SC_OK) {
-        if (err) snprintf(err, errlen, "%s: primary rays: %s", scene_name, sc_strerror(st));
-        goto done;
-    }
-    /* Shadow and diffuse rays start at primary hits. They come from one
-     * fixed tracer (the first of the table: ours if built, else Embree) so
-     * the sets do not depend on which tracers were asked for. */
-    if (opt->ray_kinds & ((1u << SC_RAYS_SHADOW) | (1u << SC_RAYS_DIFFUSE))) {
-        tracer reft;
-        const tracer_def *rd = NULL;
-        for (int d = 0; d < NDEFS && !rd; d++)
-            if (!all_tracers[d].packet)
-                rd = &all_tracers[d];
-        ref_hits = malloc(sets[SC_RAYS_PRIMARY].count * sizeof *ref_hits);
-        if (!rd || !ref_hits || tracer_build(&reft, rd, mesh) != SC_OK) {
-            st = SC_ERR_OUT_OF_MEMORY;
-            if (err) snprintf(err, errlen, "%s: no reference tracer for shadow rays", scene_name);
-            goto done;
-        }
-        st = tracer_run(&reft, sets[SC_RAYS_PRIMARY].rays, sets[SC_RAYS_PRIMARY].count, ref_hits, NULL, NULL);
-        tracer_free(&reft);
-        if (st == SC_OK)
-            st = sc_rayset_shadow(mesh, &sets[SC_RAYS_PRIMARY], ref_hits, light, &sets[SC_RAYS_SHADOW]);
-        if (st == SC_OK)
-            st = sc_rayset_diffuse(mesh, &sets[SC_RAYS_PRIMARY], ref_hits, opt->seed, &sets[SC_RAYS_DIFFUSE]);
-        if (st != SC_OK) {
-            if (err) snprintf(err, errlen, "%s: shadow/diffuse rays: %s", scene_name, sc_strerror(st));
-            goto done;
-        }
-        if (log) fprintf(log, "  shadow/diffuse origins from %s's primary hits\n", rd->name);
-    }
-    if ((st = sc_rayset_random(mesh->lo, mesh->hi, opt->random_rays ? opt->random_rays : 1, opt->seed,
-                               &sets[SC_RAYS_RANDOM])) != SC_OK ||
-        (st = sc_rayset_adversarial(mesh, opt->adversarial_rays ? opt->adversarial_rays : 1, opt->seed,
-                                    &sets[SC_RAYS_ADVERSARIAL])) != SC_OK) {
-        if (err) snprintf(err, errlen, "%s: random/adversarial rays: %s", scene_name, sc_strerror(st));
-        goto done;
-    }
-
-    size_t maxn = 1;
-    for (int k = 0; k < SC_RAYS_KIND_COUNT; k++)
-        if (sets[k].count > maxn)
-            maxn = sets[k].count;
-    hits = malloc(maxn * sizeof *hits);
-    occ = malloc(maxn);
-    sample = malloc(maxn * sizeof *sample);
-    srays = malloc(maxn * sizeof *srays);
-    if (!hits || !occ || !sample || !srays) {
-        st = SC_ERR_OUT_OF_MEMORY;
-        goto done;
-    }
-
+    sc_mesh_is_closed(&r.mesh, &r.closed);
     size_t first_row = out->count;
-    for (int k = 0; k < SC_RAYS_KIND_COUNT; k++) {
-        const sc_rayset *set = &sets[k];
-        if (!(opt->ray_kinds & (1u << k)) || set->count == 0)
-            continue;
-        /* An even stride through the set: every region of the image or
-         * kind of adversarial ray is represented. */
-        size_t ns = opt->oracle_rays < set->count ? opt->oracle_rays : set->count;
-        for (size_t s = 0; s < ns; s++) {
-            sample[s] = (size_t)((double)s * set->count / ns);
-            srays[s] = set->rays[sample[s]];
-        }
-        sc_oracle orc;
-        double t0 = now_s();
-        st = sc_oracle_run(mesh, srays, ns, opt->oracle_threads,
-                           k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
-        if (st != SC_OK) {
-            if (err) snprintf(err, errlen, "%s: oracle: %s", scene_name, sc_strerror(st));
-            goto done;
-        }
-        size_t ohits = 0;
-        for (size_t s = 0; s < ns; s++)
-            ohits += (size_t)orc.hits[s].hit;
-        if (log)
-            fprintf(log, "  %-11s %7zu rays; oracle %zu rays (%zu hit) %.1f s, %.1f exact calls/ray\n",
-                    sc_rayset_kind_name((sc_rayset_kind)k), set->count, ns, ohits, now_s() - t0,
-                    ns ? (double)orc.exact_calls / (double)ns : 0);
-        int shadow = k == SC_RAYS_SHADOW;
-        for (int ti = 0; ti < ntr; ti++) {
-            const tracer *t = &tr[ti];
-            if (shadow && t->def->packet)
-                continue;                      /* packets here are closest-hit only */
-            sc_cmp_counters ctr;
-            memset(&ctr, 0, sizeof ctr);
-            st = tracer_run(t, set->rays, set->count, hits, shadow ? occ : NULL, &ctr);
-            if (st != SC_OK) {
-                if (err) snprintf(err, errlen, "%s: %s failed: %s", scene_name, t->def->name, sc_strerror(st));
-                sc_oracle_free(&orc);
-                goto done;
-            }
-            accuracy acc;
-            score(set, sample, &orc, hits, shadow ? occ : NULL, k == SC_RAYS_ADVERSARIAL, &acc);
-            for (int th = 0; th < opt->nthreads; th++) {
-                double times[64];
-                int reps = opt->repeats < 64 ? opt->repeats : 64;
-                for (int r = 0; r < reps; r++) {
-                    st = timed_run(t, set->rays, set->count, hits, shadow ? occ : NULL, opt->threads[th],
-                                   &times[r]);
-                    if (st != SC_OK) {
-                        sc_oracle_free(&orc);
-                        goto done;
-                    }
-                }
-                qsort(times, (size_t)reps, sizeof times[0], cmp_double);
-                sc_cmp_row *row = row_add(out);
-                if (!row) {
-                    st = SC_ERR_OUT_OF_MEMORY;
-                    sc_oracle_free(&orc);
-                    goto done;
-                }
-                snprintf(row->scene, sizeof row->scene, "%s", scene_name);
-                row->triangles = mesh->view.triangle_count;
-                row->closed = closed;
-                row->rays = (sc_rayset_kind)k;
-                row->nrays = set->count;
-                snprintf(row->tracer, sizeof row->tracer, "%s", t->def->name);
-                row->threads = opt->threads[th];
-                row->mrays_per_s = (double)set->count / times[reps / 2] / 1e6;
-                row->speed_vs_embree = NAN;
-                row->oracle_rays = acc.oracle_rays;
-                row->hit_miss_disagree = acc.hit_miss;
-                row->primid_disagree = acc.primid;
-                row->holes = acc.holes;
-                row->hole_rays = acc.hole_rays;
-                row->grazes_missed = acc.grazes_missed;
-                row->graze_rays = acc.graze_rays;
-                row->t_err_median = acc.t_med;
-                row->t_err_max = acc.t_max;
-                row->bytes_per_tri = t->bytes_per_tri;
-                row->has_prefilter_stats = t->prefilter;
-                double nr = ctr.rays ? (double)ctr.rays : 1;
-                row->sphere_tests_per_ray = t->prefilter ? (double)ctr.sphere_tests / nr : NAN;
-                row->sphere_reject_rate = t->prefilter && ctr.sphere_tests
-                                              ? (double)ctr.sphere_rejects / (double)ctr.sphere_tests : NAN;
-                uint64_t passed = ctr.sphere_tests - ctr.sphere_rejects;
-                row->false_positive_rate = t->fp_exact && passed ? (double)ctr.false_positives / (double)passed
-                                                                 : NAN;
-                row->tri_tests_per_ray = t->counted ? (double)ctr.tri_tests / nr : NAN;
-            }
-        }
-        sc_oracle_free(&orc);
-    }
-    /* Speed against native Embree (rtcIntersect1 / rtcOccluded1), same set and threads. */
-    for (size_t i = first_row; i < out->count; i++)
-        for (size_t j = first_row; j < out->count; j++)
-            if (strcmp(out->rows[j].tracer, "embree") == 0 && out->rows[j].rays == out->rows[i].rays &&
-                out->rows[j].threads == out->rows[i].threads)
-                out->rows[i].speed_vs_embree = out->rows[i].mrays_per_s / out->rows[j].mrays_per_s;
-    st = SC_OK;
-done:
-    for (int k = 0; k < SC_RAYS_KIND_COUNT; k++)
-        sc_rayset_free(&sets[k]);
-    for (int i = 0; i < ntr; i++)
-        tracer_free(&tr[i]);
-    free(hits), free(ref_hits), free(occ), free(sample), free(srays);
+    if ((st = build_tracers(&r)) == SC_OK && (st = make_rays(&r, camera, light)) == SC_OK)
+        for (int k = 0; k < SC_RAYS_KIND_COUNT && st == SC_OK; k++)
+            if ((opt->ray_kinds & (1u << k)) && r.sets[k].count)
+                st = run_set(&r, k, out);
+    if (st == SC_OK)
+        speed_vs_embree(out, first_row);
+    run_free(&r);
     return st;
 }
 
@@ -620,8 +411,11 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
         snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
         snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
-        fprintf(f, "%s,%u,%s,%s,%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
-                r->scene, r->triangles, sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s,
+        sc_csv_str(f, r->scene);
+        fprintf(f, ",%u,%s,", r->triangles, sc_rayset_kind_name(r->rays));
+        sc_csv_str(f, r->tracer);
+        fprintf(f, ",%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
+                r->threads, r->mrays_per_s,
                 r->oracle_rays, r->hit_miss_disagree, r->primid_disagree, a, r->holes, b, c, d, e,
                 r->bytes_per_tri, r->nrays, r->closed, g, r->hole_rays, h, r->grazes_missed, r->graze_rays);
     }

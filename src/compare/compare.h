@@ -1,6 +1,7 @@
 /* The side-by-side comparison behind 'spherecull compare': one scene, the
  * seeded ray sets, every tracer, the exact oracle, and one row of metrics per
- * ray set x tracer x thread count. Private to src/compare and the CLI. */
+ * ray set x tracer x thread count. The tracers are tracer.h's table.
+ * Private to src/compare and the CLI. */
 #ifndef SPHERECULL_COMPARE_COMPARE_H
 #define SPHERECULL_COMPARE_COMPARE_H
 
@@ -12,11 +13,6 @@
 #include "spherecull/sc_rays.h"
 
 enum { SC_CMP_MAX_THREADS = 8, SC_CMP_MAX_TRACERS = 32 };
-
-/* Work counted inside a tracer (prefilter tracers only; zero otherwise). */
-typedef struct sc_cmp_counters {
-    uint64_t rays, sphere_tests, sphere_rejects, tri_tests, tri_hits, false_positives;
-} sc_cmp_counters;
 
 typedef struct sc_cmp_options {
     unsigned ray_kinds;                 /* bit per sc_rayset_kind */
@@ -61,9 +57,6 @@ typedef struct sc_cmp_rows {
 
 void sc_cmp_rows_free(sc_cmp_rows *r);
 
-/* Names of the tracers this build has, in table order; *count set. */
-const char *const *sc_cmp_tracer_names(int *count);
-
 /* Runs everything for one scene and appends rows. light: point light for
  * shadow rays. log (may be NULL) gets progress lines. On error err holds one
  * line. */
@@ -75,5 +68,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
 int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f);
 int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f);
 void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f);
+/* gnuplot PNGs (with their data and scripts) into DIR, created if missing:
+ * Mrays/s per ray set, and speed against oracle disagreements. */
+int sc_cmp_write_plots(const sc_cmp_rows *rows, const char *dir);
 
 #endif

@@ -19,14 +19,14 @@
 
 static const char *const kind_names[] = { "none", "cross", "touch", "ambiguous" };
 
-const char *sc_xkind_name(sc_xkind k)
+const char *sc_cross_kind_name(sc_cross_kind k)
 {
-    return (unsigned)k <= SC_XK_AMBIG ? kind_names[k] : "unknown";
+    return (unsigned)k <= SC_CROSS_AMBIG ? kind_names[k] : "unknown";
 }
 
 /* ---- the conservative double filter -------------------------------------- */
 
-int sc_x_may_hit(const sc_ray *r, const float tri[9])
+int sc_cross_may_hit(const sc_ray *r, const float tri[9])
 {
     /* The oracle's own filter on the same widened inputs, so both skip
      * exactly the same triangles. */
@@ -179,7 +179,7 @@ static int decide(xwork *w, const sc_ray *r, const float v[9], xhit *h)
             dsgn[i][k] = mpfr_sgn(w->dx[k]);
     }
     h->pert = 0;
-    for (int p = 0; p < SC_X_PERTURBATIONS; p++) {
+    for (int p = 0; p < SC_CROSS_PERTURBATIONS; p++) {
         int hit = 1;
         for (int i = 0; i < 3 && hit; i++) {
             int si = s[i];
@@ -205,7 +205,7 @@ static int tcmp(xwork *w, const xhit *i, const xhit *j)
     return mpfr_cmp(w->p1, w->p2);
 }
 
-void sc_xresult_free(sc_xresult *x)
+void sc_cross_result_free(sc_cross_result *x)
 {
     if (!x)
         return;
@@ -213,16 +213,16 @@ void sc_xresult_free(sc_xresult *x)
     memset(x, 0, sizeof *x);
 }
 
-size_t sc_xresult_first_cross(const sc_xresult *x)
+size_t sc_cross_result_first(const sc_cross_result *x)
 {
     size_t g = 0;
-    while (g < x->ngroups && x->groups[g].kind != SC_XK_CROSS)
+    while (g < x->ngroups && x->groups[g].kind != SC_CROSS_CROSS)
         g++;
     return g;
 }
 
-sc_status sc_x_classify(const sc_ray *r, const float (*tris)[9], const uint32_t *ids, size_t n,
-                        sc_xresult *out)
+sc_status sc_cross_classify(const sc_ray *r, const float (*tris)[9], const uint32_t *ids, size_t n,
+                        sc_cross_result *out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
@@ -279,24 +279,24 @@ sc_status sc_x_classify(const sc_ray *r, const float (*tris)[9], const uint32_t 
         size_t j = i + 1;
         while (j < nh && tcmp(&w, &h[i], &h[j]) == 0)
             j++;
-        sc_xgroup *g = &out->groups[out->ngroups++];
+        sc_cross_group *g = &out->groups[out->ngroups++];
         mpfr_div(w.t1, h[i].num, h[i].den, MPFR_RNDN);
         g->t = mpfr_get_d(w.t1, MPFR_RNDN);
         g->count = (uint32_t)(j - i);
-        int parity[SC_X_PERTURBATIONS] = { 0 };
+        int parity[SC_CROSS_PERTURBATIONS] = { 0 };
         for (size_t q = i; q < j; q++) {
-            for (int p = 0; p < SC_X_PERTURBATIONS; p++)
+            for (int p = 0; p < SC_CROSS_PERTURBATIONS; p++)
                 parity[p] ^= (h[q].pert >> p) & 1;
-            if (q - i < SC_X_MAX_GROUP) {
+            if (q - i < SC_CROSS_MAX_GROUP) {
                 g->tri[q - i] = h[q].tri;
                 g->pert[q - i] = h[q].pert;
                 g->facing[q - i] = h[q].facing;
             }
         }
         int odd = 0;
-        for (int p = 0; p < SC_X_PERTURBATIONS; p++)
+        for (int p = 0; p < SC_CROSS_PERTURBATIONS; p++)
             odd += parity[p];
-        g->kind = odd == SC_X_PERTURBATIONS ? SC_XK_CROSS : odd == 0 ? SC_XK_TOUCH : SC_XK_AMBIG;
+        g->kind = odd == SC_CROSS_PERTURBATIONS ? SC_CROSS_CROSS : odd == 0 ? SC_CROSS_TOUCH : SC_CROSS_AMBIG;
         i = j;
     }
     for (size_t i = 0; i < nh; i++)
@@ -304,6 +304,6 @@ sc_status sc_x_classify(const sc_ray *r, const float (*tris)[9], const uint32_t 
     free(h);
     work_clear(&w);
     if (st != SC_OK)
-        sc_xresult_free(out);
+        sc_cross_result_free(out);
     return st;
 }

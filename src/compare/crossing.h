@@ -30,47 +30,47 @@
 #include "spherecull/sc_prefilter.h"
 #include "spherecull/sc_status.h"
 
-typedef enum sc_xkind {
-    SC_XK_NONE = 0,     /* no hit */
-    SC_XK_CROSS,        /* transversal: the ray passes through the surface */
-    SC_XK_TOUCH,        /* tangential: the ray touches the surface and stays on its side */
-    SC_XK_AMBIG         /* the offsets disagree: a boundary edge or vertex of an open mesh */
-} sc_xkind;
+typedef enum sc_cross_kind {
+    SC_CROSS_NONE = 0,     /* no hit */
+    SC_CROSS_CROSS,        /* transversal: the ray passes through the surface */
+    SC_CROSS_TOUCH,        /* tangential: the ray touches the surface and stays on its side */
+    SC_CROSS_AMBIG         /* the offsets disagree: a boundary edge or vertex of an open mesh */
+} sc_cross_kind;
 
-const char *sc_xkind_name(sc_xkind k);
+const char *sc_cross_kind_name(sc_cross_kind k);
 
-enum { SC_X_MAX_GROUP = 32, SC_X_PERTURBATIONS = 4 };
+enum { SC_CROSS_MAX_GROUP = 32, SC_CROSS_PERTURBATIONS = 4 };
 
 /* The triangles met at one exact t. */
-typedef struct sc_xgroup {
+typedef struct sc_cross_group {
     double t;                        /* exact t rounded to nearest */
-    sc_xkind kind;
-    uint32_t count;                  /* triangles at this t (may exceed SC_X_MAX_GROUP) */
-    uint32_t tri[SC_X_MAX_GROUP];    /* ids, in the order given */
-    uint8_t pert[SC_X_MAX_GROUP];    /* bit p: still hit under offset p */
-    int8_t facing[SC_X_MAX_GROUP];   /* sign of D.n, n = (B-A) x (C-A) */
-} sc_xgroup;
+    sc_cross_kind kind;
+    uint32_t count;                  /* triangles at this t (may exceed SC_CROSS_MAX_GROUP) */
+    uint32_t tri[SC_CROSS_MAX_GROUP];    /* ids, in the order given */
+    uint8_t pert[SC_CROSS_MAX_GROUP];    /* bit p: still hit under offset p */
+    int8_t facing[SC_CROSS_MAX_GROUP];   /* sign of D.n, n = (B-A) x (C-A) */
+} sc_cross_group;
 
-typedef struct sc_xresult {
+typedef struct sc_cross_result {
     size_t ngroups;                  /* ascending exact t */
-    sc_xgroup *groups;
+    sc_cross_group *groups;
     size_t coplanar;                 /* candidates whose plane contains the line and that it meets */
-} sc_xresult;
+} sc_cross_result;
 
 /* Conservative double-precision filter: 0 only if the triangle certainly
  * misses the ray within [tmin, tmax]. tri: A, B, C as 9 floats. */
-int sc_x_may_hit(const sc_ray *r, const float tri[9]);
+int sc_cross_may_hit(const sc_ray *r, const float tri[9]);
 
 /* Exact classification of the ray against the candidate triangles
  * tris[0..n) (9 floats each, ids[k] their ids). The candidates must include
- * every triangle the ray meets (e.g. all that pass sc_x_may_hit), or groups
+ * every triangle the ray meets (e.g. all that pass sc_cross_may_hit), or groups
  * are incomplete. Frees nothing in *out on error; release with
- * sc_xresult_free. */
-sc_status sc_x_classify(const sc_ray *r, const float (*tris)[9], const uint32_t *ids, size_t n,
-                        sc_xresult *out);
-void sc_xresult_free(sc_xresult *x);
+ * sc_cross_result_free. */
+sc_status sc_cross_classify(const sc_ray *r, const float (*tris)[9], const uint32_t *ids, size_t n,
+                        sc_cross_result *out);
+void sc_cross_result_free(sc_cross_result *x);
 
-/* Index of the first group of kind SC_XK_CROSS, or ngroups if none. */
-size_t sc_xresult_first_cross(const sc_xresult *x);
+/* Index of the first group of kind SC_CROSS_CROSS, or ngroups if none. */
+size_t sc_cross_result_first(const sc_cross_result *x);
 
 #endif

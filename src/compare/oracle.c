@@ -265,17 +265,17 @@ static void *run_job(void *arg)
                     xt[q2][c] = (float)m->v[cs[q2].k][c];   /* exact: the mesh is float */
                 xid[q2] = m->id[cs[q2].k];
             }
-            sc_xresult x;
+            sc_cross_result x;
             j->exact_calls += nc;
-            if (sc_x_classify(r, (const float (*)[9])xt, xid, nc, &x) != SC_OK) {
+            if (sc_cross_classify(r, (const float (*)[9])xt, xid, nc, &x) != SC_OK) {
                 j->failed = 1;
                 goto out;
             }
             h->coplanar = (uint32_t)x.coplanar;
-            h->first_kind = x.ngroups ? (int)x.groups[0].kind : SC_XK_NONE;
-            size_t fc = sc_xresult_first_cross(&x);
+            h->first_kind = x.ngroups ? (int)x.groups[0].kind : SC_CROSS_NONE;
+            size_t fc = sc_cross_result_first(&x);
             if (fc < x.ngroups) {
-                const sc_xgroup *g = &x.groups[fc];
+                const sc_cross_group *g = &x.groups[fc];
                 h->cross_t = g->t;
                 h->cross_tie_count = g->count;
                 uint32_t nt = g->count < SC_ORACLE_MAX_TIES ? g->count : SC_ORACLE_MAX_TIES;
@@ -286,7 +286,7 @@ static void *run_job(void *arg)
                     h->cross_ties[b] = id;
                 }
             }
-            sc_xresult_free(&x);
+            sc_cross_result_free(&x);
         }
         if (have) {
             h->hit = 1;
@@ -407,7 +407,7 @@ sc_oracle_verdict sc_oracle_judge(const sc_oracle *o, size_t i, uint32_t prim, f
         if (!stopped)
             return SC_VERDICT_HOLE;
     }
-    if (h->hit && h->first_kind == SC_XK_TOUCH) {
+    if (h->hit && h->first_kind == SC_CROSS_TOUCH) {
         int seen = hit && (in_set(h->ties, h->tie_count, prim) || (double)t <= h->t + JUDGE_REL * fabs(h->t));
         if (!seen)
             return SC_VERDICT_GRAZE_MISSED;

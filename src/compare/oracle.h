@@ -33,7 +33,7 @@ typedef struct sc_oracle_hit {
     uint32_t tie_count;      /* triangles at exactly that t (>= 1 on a hit) */
     uint32_t ties[SC_ORACLE_MAX_TIES];   /* ascending; the first SC_ORACLE_MAX_TIES */
     /* With SC_ORACLE_CROSSING (exact, see crossing.h): */
-    int first_kind;          /* sc_xkind of the first hit: cross, touch or ambiguous */
+    int first_kind;          /* sc_cross_kind of the first hit: cross, touch or ambiguous */
     double cross_t;          /* first transversal crossing, exact t rounded; +inf if none */
     uint32_t cross_tie_count;                 /* triangles at cross_t */
     uint32_t cross_ties[SC_ORACLE_MAX_TIES];  /* ascending; the first SC_ORACLE_MAX_TIES */

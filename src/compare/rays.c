@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/sc_names.h"
 #include "common/sc_rng.h"
 #include "mesh_edges.h"
 
@@ -18,19 +19,16 @@ static const char *const tag_names[SC_RAY_TAG_COUNT] = {
 
 const char *sc_rayset_kind_name(sc_rayset_kind kind)
 {
-    return (unsigned)kind < SC_RAYS_KIND_COUNT ? kind_names[kind] : "unknown";
+    return sc_enum_name(kind_names, SC_RAYS_KIND_COUNT, (int)kind, "unknown");
 }
 
 sc_status sc_rayset_kind_from_name(const char *name, sc_rayset_kind *out)
 {
-    if (!name || !out)
+    int v;
+    if (!out || sc_enum_lookup(kind_names, SC_RAYS_KIND_COUNT, name, &v) != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < SC_RAYS_KIND_COUNT; i++)
-        if (strcmp(name, kind_names[i]) == 0) {
-            *out = (sc_rayset_kind)i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_rayset_kind)v;
+    return SC_OK;
 }
 
 const char *sc_ray_tag_name(sc_ray_tag tag)

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/sc_names.h"
 #include "isa_dispatch.h"
 #include "x86/cpu_features.h"
 
@@ -13,19 +14,16 @@ static const char *const isa_names[SC_ISA_COUNT] = { "scalar", "sse4", "avx2", "
 
 const char *sc_isa_name(sc_isa isa)
 {
-    return (unsigned)isa < SC_ISA_COUNT ? isa_names[isa] : "unknown";
+    return sc_enum_name(isa_names, SC_ISA_COUNT, (int)isa, "unknown");
 }
 
 sc_status sc_isa_from_name(const char *name, sc_isa *out)
 {
-    if (!name || !out)
+    int v;
+    if (!out || sc_enum_lookup(isa_names, SC_ISA_COUNT, name, &v) != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < SC_ISA_COUNT; i++)
-        if (strcmp(name, isa_names[i]) == 0) {
-            *out = (sc_isa)i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_isa)v;
+    return SC_OK;
 }
 
 static const sc_kernels kernels_scalar = { SC_ISA_SCALAR, &sc_sphere_kernels_scalar, sc_trace_kernels_scalar };

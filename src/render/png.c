@@ -10,6 +10,7 @@
 
 #include <png.h>
 
+#include "common/sc_atomic_file.h"
 #include "spherecull/sc_image.h"
 
 static sc_status fail(char *err, size_t errlen, sc_status st, const char *fmt, ...)
@@ -59,64 +60,40 @@ void sc_image_free(sc_image *img)
     img->width = img->height = 0;
 }
 
+typedef struct png_job {
+    const sc_image *img;
+    char why[128];               /* libpng's message when it fails */
+} png_job;
+
+static int png_write_fn(void *ctx, FILE *f)
+{
+    png_job *j = ctx;
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = (png_uint_32)j->img->width;
+    pi.height = (png_uint_32)j->img->height;
+    pi.format = PNG_FORMAT_RGB;
+    int ok = png_image_write_to_stdio(&pi, f, 0, j->img->rgb, 0, NULL) != 0;
+    if (!ok)
+        snprintf(j->why, sizeof j->why, "%s", pi.message[0] ? pi.message : "libpng failed");
+    png_image_free(&pi);
+    return ok ? 0 : -1;
+}
+
 sc_status sc_png_write(const char *path, const sc_image *img, char *err, size_t errlen)
 {
     if (!path || !*path || !img || !img->rgb || !size_ok(img->width, img->height))
         return fail(err, errlen, SC_ERR_INVALID_ARGUMENT, "invalid PNG path or image");
-    /* The rename below would replace a device or a symlink to one (as root,
-     * -o /dev/null turned /dev/null into a PNG file): refuse instead. */
+    /* The rename would replace a device or a symlink to one (as root,
+     * -o /dev/null would turn /dev/null into a PNG file): refuse instead. */
     struct stat sb;
     if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
         return fail(err, errlen, SC_ERR_IO, "%s: not a regular file; PNG outputs replace their target", path);
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 16);
-    if (!tmp)
-        return fail(err, errlen, SC_ERR_OUT_OF_MEMORY, "out of memory");
-    snprintf(tmp, len + 16, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        sc_status st = fail(err, errlen, SC_ERR_IO, "%s: cannot create a temporary file there: %s",
-                            path, strerror(errno));
-        free(tmp);
-        return st;
-    }
-    /* mkstemp makes 0600; an image is meant to be shared like any output. */
-    (void)fchmod(fd, 0644);
-    FILE *f = fdopen(fd, "wb");
-    if (!f) {
-        sc_status st = fail(err, errlen, SC_ERR_IO, "%s: %s", path, strerror(errno));
-        close(fd);
-        unlink(tmp);
-        free(tmp);
-        return st;
-    }
-    png_image pi;
-    memset(&pi, 0, sizeof pi);
-    pi.version = PNG_IMAGE_VERSION;
-    pi.width = (png_uint_32)img->width;
-    pi.height = (png_uint_32)img->height;
-    pi.format = PNG_FORMAT_RGB;
-    int ok = png_image_write_to_stdio(&pi, f, 0, img->rgb, 0, NULL) != 0;
-    char why[128] = "";
-    if (!ok)
-        snprintf(why, sizeof why, "%s", pi.message[0] ? pi.message : "libpng failed");
-    png_image_free(&pi);
-    if (ok && (fflush(f) != 0 || ferror(f))) {
-        ok = 0;
-        snprintf(why, sizeof why, "%s", strerror(errno));
-    }
-    if (fclose(f) != 0 && ok) {
-        ok = 0;
-        snprintf(why, sizeof why, "%s", strerror(errno));
-    }
-    if (ok && rename(tmp, path) != 0) {
-        ok = 0;
-        snprintf(why, sizeof why, "%s", strerror(errno));
-    }
-    if (!ok)
-        unlink(tmp);
-    free(tmp);
-    return ok ? SC_OK : fail(err, errlen, SC_ERR_IO, "%s: %s", path, why);
+    png_job j = { img, "" };
+    if (sc_write_atomic(path, png_write_fn, &j) != 0)
+        return fail(err, errlen, SC_ERR_IO, "%s: %s", path, j.why[0] ? j.why : strerror(errno));
+    return SC_OK;
 }
 
 sc_status sc_png_read(const char *path, sc_image *img, char *err, size_t errlen)

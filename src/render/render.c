@@ -9,6 +9,8 @@
 #include <omp.h>
 #endif
 
+#include "common/sc_clock.h"
+#include "common/sc_names.h"
 #include "common/sc_rng.h"
 #include "spherecull/sc_render.h"
 
@@ -20,19 +22,16 @@ static const char *const debug_names[SC_RENDER_DEBUG_COUNT] = { "shaded", "norma
 
 const char *sc_render_debug_name(sc_render_debug d)
 {
-    return (unsigned)d < SC_RENDER_DEBUG_COUNT ? debug_names[d] : "?";
+    return sc_enum_name(debug_names, SC_RENDER_DEBUG_COUNT, (int)d, "?");
 }
 
 sc_status sc_render_debug_from_name(const char *name, sc_render_debug *out)
 {
-    if (!name || !out)
+    int v;
+    if (!out || sc_enum_lookup(debug_names, SC_RENDER_DEBUG_COUNT, name, &v) != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < SC_RENDER_DEBUG_COUNT; i++)
-        if (strcmp(name, debug_names[i]) == 0) {
-            *out = (sc_render_debug)i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_render_debug)v;
+    return SC_OK;
 }
 
 void sc_render_options_init(sc_render_options *o)
@@ -231,13 +230,6 @@ static void heat_color(double x, uint8_t out[3])
         out[k] = (uint8_t)lrint(255 * (stops[i][k] * (1 - t) + stops[i + 1][k] * t));
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_options *opt,
                     sc_image *out, sc_render_stats *stats)
 {
@@ -300,7 +292,7 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
     sc_render_stats total;
     memset(&total, 0, sizeof total);
     int done = 0;
-    double t0 = now_seconds();
+    double t0 = sc_now_seconds();
 #ifdef _OPENMP
     int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
 #pragma omp parallel num_threads(nthreads)
@@ -341,7 +333,7 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
             add_stats(&total.trace, &local.trace);
         }
     }
-    total.seconds = now_seconds() - t0;
+    total.seconds = sc_now_seconds() - t0;
 
     if (opt->debug == SC_RENDER_DEPTH || opt->debug == SC_RENDER_HEAT) {
         double vmin = INFINITY, vmax = -INFINITY;

@@ -2,6 +2,7 @@
  * checks, then the kernels of the active ISA level (src/isa). */
 #include <string.h>
 
+#include "common/sc_names.h"
 #include "isa/isa_dispatch.h"
 #include "simd/sphere_kernels.h"
 
@@ -11,19 +12,16 @@ static const char *const kind_names[SC_BATCH_KIND_COUNT] = {
 
 const char *sc_batch_kind_name(sc_batch_kind kind)
 {
-    return (unsigned)kind < SC_BATCH_KIND_COUNT ? kind_names[kind] : "unknown";
+    return sc_enum_name(kind_names, SC_BATCH_KIND_COUNT, (int)kind, "unknown");
 }
 
 sc_status sc_batch_kind_from_name(const char *name, sc_batch_kind *out)
 {
-    if (!name || !out)
+    int v;
+    if (!out || sc_enum_lookup(kind_names, SC_BATCH_KIND_COUNT, name, &v) != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < SC_BATCH_KIND_COUNT; i++)
-        if (strcmp(name, kind_names[i]) == 0) {
-            *out = (sc_batch_kind)i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_batch_kind)v;
+    return SC_OK;
 }
 
 size_t sc_simd_padded(size_t count)

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "common/sc_names.h"
 #include "spherecull/sc_circumsphere.h"
 
 #define REAL float
@@ -52,7 +53,7 @@ static const char *const kind_names[SC_SPHERE_KIND_COUNT] = { "circum", "minimal
 
 const char *sc_method_name(sc_method m)
 {
-    return (unsigned)m < SC_METHOD_COUNT ? method_names[m] : "unknown";
+    return sc_enum_name(method_names, SC_METHOD_COUNT, (int)m, "unknown");
 }
 
 const char *sc_origin_name(sc_origin o)
@@ -62,35 +63,23 @@ const char *sc_origin_name(sc_origin o)
 
 const char *sc_sphere_kind_name(sc_sphere_kind k)
 {
-    return (unsigned)k < SC_SPHERE_KIND_COUNT ? kind_names[k] : "unknown";
-}
-
-static sc_status lookup(const char *name, const char *const *names, int count, int *out)
-{
-    if (!name || !out)
-        return SC_ERR_INVALID_ARGUMENT;
-    for (int i = 0; i < count; i++)
-        if (strcmp(name, names[i]) == 0) {
-            *out = i;
-            return SC_OK;
-        }
-    return SC_ERR_INVALID_ARGUMENT;
+    return sc_enum_name(kind_names, SC_SPHERE_KIND_COUNT, (int)k, "unknown");
 }
 
 sc_status sc_method_from_name(const char *name, sc_method *out)
 {
-    int i = 0;
-    sc_status st = lookup(name, method_names, SC_METHOD_COUNT, &i);
-    if (st == SC_OK)
-        *out = (sc_method)i;
-    return st;
+    int v;
+    if (!out || sc_enum_lookup(method_names, SC_METHOD_COUNT, name, &v) != 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_method)v;
+    return SC_OK;
 }
 
 sc_status sc_sphere_kind_from_name(const char *name, sc_sphere_kind *out)
 {
-    int i = 0;
-    sc_status st = lookup(name, kind_names, SC_SPHERE_KIND_COUNT, &i);
-    if (st == SC_OK)
-        *out = (sc_sphere_kind)i;
-    return st;
+    int v;
+    if (!out || sc_enum_lookup(kind_names, SC_SPHERE_KIND_COUNT, name, &v) != 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_sphere_kind)v;
+    return SC_OK;
 }

@@ -1,0 +1,307 @@
+/* The tracer benchmark (see bench.h). */
+#define _GNU_SOURCE
+#include <linux/perf_event.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include "bench.h"
+#include "common/sc_clock.h"
+#include "spherecull/sc_trace.h"
+
+enum { BRUTE_SAMPLE = 64 };
+
+static const char *const kind_names[2] = { "primary", "shadow" };
+
+const char *sc_bench_kind_name(int kind)
+{
+    return kind == SC_BENCH_SHADOW ? kind_names[1] : kind_names[0];
+}
+
+void sc_bench_options_default(sc_bench_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->kinds[0] = SC_BENCH_PRIMARY, o->kinds[1] = SC_BENCH_SHADOW, o->nkinds = 2;
+    o->threads[0] = 1, o->threads[1] = 2, o->nthreads = 2;
+    o->leaves[0] = 4, o->leaves[1] = 8, o->leaves[2] = 16, o->nleaves = 3;
+    for (int m = 0; m < SC_PREFILTER_MODE_COUNT; m++)
+        o->modes[m] = m;
+    o->nmodes = SC_PREFILTER_MODE_COUNT;
+    o->width = 512, o->height = 384, o->repeats = 5;
+    o->trav_cost = -1;
+    o->tri = SC_TRI_WATERTIGHT;
+}
+
+int sc_bench_cycles_open(void)
+{
+    struct perf_event_attr a;
+    memset(&a, 0, sizeof a);
+    a.size = sizeof a;
+    a.type = PERF_TYPE_HARDWARE;
+    a.config = PERF_COUNT_HW_CPU_CYCLES;
+    a.exclude_kernel = 1;
+    a.exclude_hv = 1;
+    return (int)syscall(SYS_perf_event_open, &a, 0, -1, -1, 0);
+}
+
+static uint64_t cycles_read(int fd)
+{
+    uint64_t v = 0;
+    if (fd < 0 || read(fd, &v, sizeof v) != (ssize_t)sizeof v)
+        return 0;
+    return v;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* Everything one scene's measurements share. */
+typedef struct bench_ctx {
+    sc_checked_mesh mesh;        /* checked once at entry */
+    const sc_bench_options *o;
+    int cycles_fd;
+    sc_rayset prim, shad;
+    sc_tracer emb;                 /* handle NULL without Embree */
+    sc_hitrec *hits, *emb_hits;
+    uint8_t *occ, *emb_occ;
+    char *err;
+    size_t errlen;
+} bench_ctx;
+
+static sc_status run(const sc_tracer *t, int kind, const sc_rayset *rs, bench_ctx *c, int threads,
+                     double *seconds)
+{
+    return sc_tracer_run_threads(t, rs->rays, rs->count, kind == SC_BENCH_PRIMARY ? c->hits : NULL,
+                                 kind == SC_BENCH_SHADOW ? c->occ : NULL, threads, seconds);
+}
+
+/* The shadow rays come from our own hits in the default configuration, so
+ * the ray set does not depend on whether Embree is built in. */
+static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light *lights, size_t nlights,
+                           sc_bench_scene *sc)
+{
+    const sc_bench_options *o = c->o;
+    sc->triangles = c->mesh.view.triangle_count;
+    for (int k = 0; k < 3; k++)
+        sc->lo[k] = c->mesh.lo[k], sc->hi[k] = c->mesh.hi[k];
+    sc->camera = *camera;
+    sc->camera.width = o->width, sc->camera.height = o->height;
+    sc_light_point(lights, nlights, sc->lo, sc->hi, sc->light);
+    sc_status st = sc_rayset_primary(&sc->camera, &c->prim);
+    if (st != SC_OK) {
+        snprintf(c->err, c->errlen, "primary rays: %s", sc_strerror(st));
+        return st;
+    }
+    size_t n = c->prim.count + 1;
+    c->hits = malloc(n * sizeof *c->hits);
+    c->emb_hits = malloc(n * sizeof *c->emb_hits);
+    c->occ = malloc(n);
+    c->emb_occ = malloc(n);
+    if (!c->hits || !c->emb_hits || !c->occ || !c->emb_occ) {
+        snprintf(c->err, c->errlen, "out of memory");
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    sc_tracer ref;
+    if ((st = sc_tracer_build_bvh(&ref, "reference", &cfg, &c->mesh)) != SC_OK) {
+        snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
+        return st;
+    }
+    sc_tracer_run(&ref, c->prim.rays, c->prim.count, c->hits, NULL, NULL);
+    st = sc_rayset_shadow(&c->mesh, &c->prim, c->hits, sc->light, &c->shad);
+    if (st == SC_OK)
+        sc_tracer_run(&ref, c->shad.rays, c->shad.count, NULL, c->occ, NULL);
+    sc_tracer_free(&ref);
+    if (st != SC_OK) {
+        snprintf(c->err, c->errlen, "shadow rays: %s", sc_strerror(st));
+        return st;
+    }
+    sc->primary = c->prim.count, sc->shadow = c->shad.count;
+    sc->primary_hits = sc->shadow_blocked = 0;
+    for (size_t i = 0; i < c->prim.count; i++)
+        sc->primary_hits += c->hits[i].prim != SC_HITREC_MISS;
+    for (size_t i = 0; i < c->shad.count; i++)
+        sc->shadow_blocked += c->occ[i];
+    return SC_OK;
+}
+
+static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
+{
+    sc->embree_bpt = sc->embree_bvh_bpt = NAN;
+    const sc_tracer_def *def = sc_tracer_find(c->o->embree_robust ? "embree-robust" : "embree");
+    if (!def)
+        return SC_OK;
+    sc_status st = sc_tracer_build(&c->emb, def, &c->mesh);
+    if (st != SC_OK) {
+        snprintf(c->err, c->errlen, "Embree: %s", sc_strerror(st));
+        return st;
+    }
+    /* Embree holds its own copy of the vertex and index buffers (12 B per
+     * vertex and per triangle); our leaves need no mesh at all, so the
+     * comparable figure is Embree's BVH alone. Both are reported. */
+    double ntri = (double)c->mesh.view.triangle_count;
+    sc->embree_bpt = c->emb.bytes_per_tri;
+    sc->embree_bvh_bpt = sc->embree_bpt - 12.0 * (double)c->mesh.view.vertex_count / ntri - 12.0;
+    sc_tracer_run(&c->emb, c->prim.rays, c->prim.count, c->emb_hits, NULL, NULL);
+    sc_tracer_run(&c->emb, c->shad.rays, c->shad.count, NULL, c->emb_occ, NULL);
+    return SC_OK;
+}
+
+/* Hits of one configuration against brute force (a sample; same
+ * arithmetic, so only exact ties may differ) and against Embree (all). */
+static void check(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *rs, sc_bench_row *r)
+{
+    const size_t n = rs->count;
+    memset(&r->work, 0, sizeof r->work);
+    sc_tracer_run(t, rs->rays, n, kind == SC_BENCH_PRIMARY ? c->hits : NULL,
+                  kind == SC_BENCH_SHADOW ? c->occ : NULL, &r->work);
+    size_t step = n > BRUTE_SAMPLE ? n / BRUTE_SAMPLE : 1;
+    r->diff_brute = r->diff_embree = 0;
+    for (size_t i = 0; i < n; i += step) {
+        sc_hitrec h;
+        sc_trace_closest_brute(sc_tracer_bvh(t), &rs->rays[i], &h);
+        if (kind == SC_BENCH_PRIMARY ? !sc_same_hit(&c->hits[i], &h, 0.0f) : c->occ[i] != (h.prim != SC_HITREC_MISS))
+            r->diff_brute++;
+    }
+    if (c->emb.handle)
+        for (size_t i = 0; i < n; i++)
+            r->diff_embree += kind == SC_BENCH_PRIMARY ? !sc_same_hit(&c->hits[i], &c->emb_hits[i], 1e-4f)
+                                                       : c->occ[i] != c->emb_occ[i];
+}
+
+/* Paired repeats at one thread count: Embree first on even repeats,
+ * second on odd ones. */
+static void time_pairs(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *rs, int thr, sc_bench_row *r)
+{
+    const int reps = c->o->repeats;
+    double t_o[SC_BENCH_MAX_REPEATS], t_e[SC_BENCH_MAX_REPEATS], ratio[SC_BENCH_MAX_REPEATS],
+        cratio[SC_BENCH_MAX_REPEATS];
+    const int emb = c->emb.handle != NULL, fd = c->cycles_fd;
+    run(t, kind, rs, c, thr, NULL);          /* warm-up */
+    if (emb)
+        run(&c->emb, kind, rs, c, thr, NULL);
+    for (int i = 0; i < reps; i++) {
+        double te = NAN, to;
+        uint64_t ce = 0, co, c0;
+        if (emb && i % 2 == 0) {
+            c0 = cycles_read(fd);
+            run(&c->emb, kind, rs, c, thr, &te);
+            ce = cycles_read(fd) - c0;
+        }
+        c0 = cycles_read(fd);
+        run(t, kind, rs, c, thr, &to);
+        co = cycles_read(fd) - c0;
+        if (emb && i % 2 == 1) {
+            c0 = cycles_read(fd);
+            run(&c->emb, kind, rs, c, thr, &te);
+            ce = cycles_read(fd) - c0;
+        }
+        t_o[i] = to, t_e[i] = te;
+        ratio[i] = te / to;
+        cratio[i] = co ? (double)ce / (double)co : NAN;
+    }
+    r->threads = thr;
+    r->mrays = (double)rs->count / median(t_o, reps) * 1e-6;
+    r->embree_mrays = (double)rs->count / median(t_e, reps) * 1e-6;
+    r->ratio = median(ratio, reps);
+    r->cycle_ratio = thr == 1 && fd >= 0 ? median(cratio, reps) : NAN;
+}
+
+/* One BVH configuration: checked, then timed per ray kind and thread count. */
+static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sink *sink)
+{
+    const sc_bench_options *o = c->o;
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.leaf_size = leaf;
+    cfg.prefilter = (sc_prefilter_mode)mode;
+    cfg.tri_test = o->tri;
+    if (o->trav_cost >= 0)
+        cfg.traversal_cost = o->trav_cost;
+    sc_tracer t;
+    sc_status st = sc_tracer_build_bvh(&t, sc_prefilter_mode_name(cfg.prefilter), &cfg, &c->mesh);
+    if (st != SC_OK) {
+        snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
+        return st;
+    }
+    sc_bvh_info info;
+    sc_bvh_get_info(sc_tracer_bvh(&t), &info);
+    sc_bench_row r;
+    memset(&r, 0, sizeof r);
+    r.leaf = cfg.leaf_size, r.prefilter = cfg.prefilter, r.isa = sc_isa_active();
+    r.bytes_per_tri = t.bytes_per_tri;
+    r.sphere_leaf_pct = info.leaves ? 100.0 * (double)info.leaves_with_spheres / (double)info.leaves : 0;
+    r.leaf_count = info.leaves, r.leaves_with_spheres = info.leaves_with_spheres;
+    r.build_ms = info.build_seconds * 1e3;
+    for (int ki = 0; ki < o->nkinds && st == SC_OK; ki++) {
+        r.kind = o->kinds[ki];
+        const sc_rayset *rs = r.kind == SC_BENCH_PRIMARY ? &c->prim : &c->shad;
+        r.rays = rs->count;
+        check(c, &t, r.kind, rs, &r);
+        if (r.diff_brute) {
+            size_t step = rs->count > BRUTE_SAMPLE ? rs->count / BRUTE_SAMPLE : 1;
+            snprintf(c->err, c->errlen, "leaf %d %s: %zu of %zu sampled %s rays differ from brute force",
+                     cfg.leaf_size, sc_prefilter_mode_name(cfg.prefilter), r.diff_brute,
+                     (rs->count + step - 1) / step, kind_names[r.kind]);
+            st = SC_ERR_INVALID_ARGUMENT;
+            break;
+        }
+        for (int ti = 0; ti < o->nthreads; ti++) {
+            time_pairs(c, &t, r.kind, rs, o->threads[ti], &r);
+            if (sink && sink->row)
+                sink->row(sink->ctx, &r);
+        }
+    }
+    sc_tracer_free(&t);
+    return st;
+}
+
+sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const sc_light *lights,
+                       size_t nlights, const sc_bench_options *o, int cycles_fd, const sc_bench_sink *sink,
+                       char *err, size_t errlen)
+{
+    char dummy[8];
+    if (!err || !errlen)
+        err = dummy, errlen = sizeof dummy;
+    err[0] = 0;
+    if (!mesh || !camera || !o || o->repeats < 1 || o->repeats > SC_BENCH_MAX_REPEATS)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < o->nthreads; i++)
+        if (o->threads[i] < 1 || o->threads[i] > SC_TRACER_MAX_THREADS)
+            return SC_ERR_INVALID_ARGUMENT;
+    bench_ctx c;
+    memset(&c, 0, sizeof c);
+    if (sc_mesh_check(mesh, &c.mesh) != SC_OK) {
+        snprintf(err, errlen, "bad mesh");
+        return SC_ERR_INVALID_ARGUMENT;
+    }
+    c.o = o, c.cycles_fd = cycles_fd, c.err = err, c.errlen = errlen;
+    sc_bench_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc_status st = make_rays(&c, camera, lights, nlights, &sc);
+    if (st == SC_OK)
+        st = make_embree(&c, &sc);
+    if (st == SC_OK && sink && sink->scene)
+        sink->scene(sink->ctx, &sc);
+    for (int li = 0; li < o->nleaves && st == SC_OK; li++)
+        for (int mi = 0; mi < o->nmodes && st == SC_OK; mi++)
+            st = run_config(&c, o->leaves[li], o->modes[mi], sink);
+    sc_tracer_free(&c.emb);
+    free(c.hits), free(c.emb_hits), free(c.occ), free(c.emb_occ);
+    sc_rayset_free(&c.prim);
+    sc_rayset_free(&c.shad);
+    return st;
+}

@@ -1,0 +1,71 @@
+/* The tracer benchmark behind 'spherecull bench': our BVH per prefilter
+ * mode x leaf size x thread count against Embree on the same rays, in the
+ * same run. Before any timing, every configuration's hits are checked
+ * against brute force over all triangles (a sample of rays: a difference is
+ * an error) and against Embree (all rays: counted). Timings are paired:
+ * each repeat times Embree and us back to back (alternating who goes
+ * first) and the ratio is the median of the per-repeat ratios, so load
+ * from other processes hits both sides alike. With 1 thread, user-mode
+ * cycles are read as well when the kernel allows perf events. */
+#ifndef SPHERECULL_COMPARE_BENCH_H
+#define SPHERECULL_COMPARE_BENCH_H
+
+#include "spherecull/sc_isa.h"
+#include "tracer.h"
+
+enum { SC_BENCH_MAX_LIST = 16, SC_BENCH_MAX_REPEATS = 64, SC_BENCH_PRIMARY = 0, SC_BENCH_SHADOW = 1 };
+
+typedef struct sc_bench_options {
+    int kinds[2], nkinds;                          /* SC_BENCH_PRIMARY / SC_BENCH_SHADOW */
+    int threads[SC_BENCH_MAX_LIST], nthreads;
+    int leaves[SC_BENCH_MAX_LIST], nleaves;
+    int modes[SC_BENCH_MAX_LIST], nmodes;          /* sc_prefilter_mode */
+    int width, height, repeats;
+    int embree_robust;
+    float trav_cost;                               /* < 0: the builder's default */
+    sc_tri_test tri;
+} sc_bench_options;
+
+void sc_bench_options_default(sc_bench_options *o);
+const char *sc_bench_kind_name(int kind);
+
+/* What one scene's rays are. */
+typedef struct sc_bench_scene {
+    size_t triangles;
+    float lo[3], hi[3], light[3];
+    sc_camera camera;
+    size_t primary, primary_hits, shadow, shadow_blocked;
+    double embree_bpt, embree_bvh_bpt;   /* NaN without Embree */
+} sc_bench_scene;
+
+/* One measurement. */
+typedef struct sc_bench_row {
+    int kind, threads, leaf;
+    sc_prefilter_mode prefilter;
+    sc_isa isa;                                       /* the active level (sc_isa.h) */
+    size_t rays;
+    double bytes_per_tri, sphere_leaf_pct;
+    double mrays, embree_mrays, ratio, cycle_ratio;   /* NaN when not measured */
+    sc_tracer_counters work;                          /* of the checking run */
+    size_t leaf_count, leaves_with_spheres;
+    double build_ms;
+    size_t diff_embree, diff_brute;
+} sc_bench_row;
+
+typedef struct sc_bench_sink {
+    void (*scene)(void *ctx, const sc_bench_scene *s);
+    void (*row)(void *ctx, const sc_bench_row *r);
+    void *ctx;
+} sc_bench_sink;
+
+/* User-mode cycle counter of the calling thread: a file descriptor, or -1
+ * when perf events are not allowed. */
+int sc_bench_cycles_open(void);
+
+/* Runs the benchmark on one mesh; rows go to sink as they are measured.
+ * cycles_fd: sc_bench_cycles_open's or -1. On error err holds one line. */
+sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const sc_light *lights,
+                       size_t nlights, const sc_bench_options *o, int cycles_fd, const sc_bench_sink *sink,
+                       char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,296 @@
+/* The tracer table and the runs behind it (see tracer.h). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/sc_clock.h"
+#include "spherecull/sc_trace.h"
+#include "tracer.h"
+#ifdef SC_HAVE_EMBREE
+#include "spherecull/sc_embree.h"
+#endif
+
+static const sc_tracer_def all_tracers[] = {
+    { "spherecull-off", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0 },
+    { "spherecull-exact", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0 },
+    { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0 },
+    { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0 },
+    { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0 },
+#ifdef SC_HAVE_EMBREE
+    { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
+    { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
+    { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0 },
+    { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0 },
+    { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8 },
+    { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16 },
+    { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
+    { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
+    { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
+    { "embree-user-plain16", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
+#endif
+};
+enum { NDEFS = sizeof all_tracers / sizeof all_tracers[0] };
+
+const char *const *sc_tracer_names(int *count)
+{
+    static const char *names[NDEFS + 1];
+    for (int i = 0; i < NDEFS; i++)
+        names[i] = all_tracers[i].name;
+    names[NDEFS] = NULL;
+    if (count)
+        *count = NDEFS;
+    return names;
+}
+
+const sc_tracer_def *sc_tracer_find(const char *name)
+{
+    for (int i = 0; name && i < NDEFS; i++)
+        if (strcmp(all_tracers[i].name, name) == 0)
+            return &all_tracers[i];
+    return NULL;
+}
+
+sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg, const sc_checked_mesh *cm)
+{
+    if (!t || !cfg || !cm)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_mesh_view *m = &cm->view;
+    memset(t, 0, sizeof *t);
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0 };
+    sc_bvh *b;
+    sc_status st = sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, cfg, &b);
+    if (st != SC_OK)
+        return st;
+    sc_bvh_info info;
+    sc_bvh_get_info(b, &info);
+    t->handle = b;
+    t->bytes_per_tri = m->triangle_count ? (double)info.total_bytes / m->triangle_count : 0;
+    t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
+    t->counted = 1;
+    /* auto mixes leaves with and without spheres: the counters cannot tell
+     * which triangle tests followed a passed sphere */
+    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL;
+    return SC_OK;
+}
+
+sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm)
+{
+    if (!t || !def || !cm)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_mesh_view *m = &cm->view;
+    if (def->family == SC_TRACER_OURS) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.prefilter = (sc_prefilter_mode)def->mode;
+        cfg.tri_test = (sc_tri_test)def->quality;
+        return sc_tracer_build_bvh(t, def->name, &cfg, cm);
+    }
+    memset(t, 0, sizeof *t);
+    t->def = *def;
+#ifdef SC_HAVE_EMBREE
+    sc_embree_config cfg;
+    sc_embree_config_default(&cfg);
+    cfg.mode = (sc_embree_mode)def->mode;
+    cfg.quality = (sc_embree_quality)def->quality;
+    if (def->cluster)
+        cfg.cluster_size = def->cluster;
+    sc_embree *e;
+    sc_status st = sc_embree_create(cm, &cfg, &e);
+    if (st != SC_OK)
+        return st;
+    sc_embree_info info;
+    sc_embree_get_info(e, &info);
+    t->handle = e;
+    t->bytes_per_tri = (double)(info.embree_bytes + info.ours_bytes) / m->triangle_count;
+    t->prefilter = def->mode == SC_EMBREE_USER_PREFILTER;
+    t->counted = def->mode == SC_EMBREE_USER_PREFILTER || def->mode == SC_EMBREE_USER_PLAIN;
+    t->fp_exact = t->prefilter;
+    return SC_OK;
+#else
+    return SC_ERR_UNSUPPORTED;
+#endif
+}
+
+void sc_tracer_free(sc_tracer *t)
+{
+    if (!t || !t->handle)
+        return;
+    if (t->def.family == SC_TRACER_OURS)
+        sc_bvh_free(t->handle);
+#ifdef SC_HAVE_EMBREE
+    else
+        sc_embree_destroy(t->handle);
+#endif
+    t->handle = NULL;
+}
+
+const sc_bvh *sc_tracer_bvh(const sc_tracer *t)
+{
+    return t && t->def.family == SC_TRACER_OURS ? t->handle : NULL;
+}
+
+void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c)
+{
+    to->rays += c->rays, to->nodes += c->nodes, to->leaves += c->leaves;
+    to->sphere_tests += c->sphere_tests, to->sphere_rejects += c->sphere_rejects;
+    to->tri_tests += c->tri_tests, to->tri_hits += c->tri_hits, to->false_positives += c->false_positives;
+}
+
+static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
+                          sc_tracer_counters *ctr)
+{
+    sc_trace_stats ts, *tsp = NULL;
+    if (ctr) {
+        memset(&ts, 0, sizeof ts);
+        tsp = &ts;
+    }
+    for (size_t i = 0; i < n; i++) {
+        sc_status st;
+        if (occ) {
+            int o = 0;
+            st = sc_trace_any(t->handle, &rays[i], &o, tsp);
+            occ[i] = (uint8_t)o;
+        } else {
+            st = sc_trace_closest(t->handle, &rays[i], &hits[i], tsp);
+        }
+        if (st != SC_OK)
+            return st;
+    }
+    if (ctr) {
+        /* every exact test in a sphere leaf follows a passed sphere; exact
+         * only when all leaves carry spheres */
+        sc_tracer_counters c = { n, ts.nodes, ts.leaves, ts.sphere_tests, ts.sphere_rejects, ts.tri_tests,
+                                 ts.tri_hits, t->fp_exact ? ts.tri_tests - ts.tri_hits : 0 };
+        sc_tracer_counters_add(ctr, &c);
+    }
+    return SC_OK;
+}
+
+#ifdef SC_HAVE_EMBREE
+static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
+                            sc_tracer_counters *ctr)
+{
+    sc_embree_counters ec, *ecp = NULL;
+    if (ctr) {
+        memset(&ec, 0, sizeof ec);
+        ecp = &ec;
+    }
+    sc_status st;
+    if (occ)
+        st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);
+    else if (t->def.packet)
+        st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, ecp);
+    else
+        st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
+    if (st == SC_OK && ctr) {
+        sc_tracer_counters c = { n, 0, 0, ec.sphere_tests, ec.sphere_rejects, ec.tri_tests, ec.tri_hits,
+                                 ec.false_positives };
+        sc_tracer_counters_add(ctr, &c);
+    }
+    return st;
+}
+#endif
+
+sc_status sc_tracer_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
+                        sc_tracer_counters *ctr)
+{
+    if (!t || !t->handle || (n && (!rays || (!hits && !occ))))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (t->def.family == SC_TRACER_OURS)
+        return ours_run(t, rays, n, hits, occ, ctr);
+#ifdef SC_HAVE_EMBREE
+    return embree_run(t, rays, n, hits, occ, ctr);
+#else
+    return SC_ERR_UNSUPPORTED;
+#endif
+}
+
+/* ---- threads -------------------------------------------------------------- */
+
+enum { CHUNK = 1024 };   /* a multiple of every packet width */
+
+typedef struct pool_job {
+    const sc_tracer *t;
+    const sc_ray *rays;
+    size_t n;
+    sc_hitrec *hits;
+    uint8_t *occ;
+    atomic_size_t next;
+    atomic_int failed;
+} pool_job;
+
+static void *pool_worker(void *arg)
+{
+    pool_job *j = arg;
+    for (;;) {
+        size_t b = atomic_fetch_add(&j->next, CHUNK);
+        if (b >= j->n)
+            break;
+        size_t e = b + CHUNK < j->n ? b + CHUNK : j->n;
+        if (sc_tracer_run(j->t, j->rays + b, e - b, j->occ ? NULL : j->hits + b, j->occ ? j->occ + b : NULL,
+                          NULL) != SC_OK)
+            atomic_store(&j->failed, 1);
+    }
+    return NULL;
+}
+
+sc_status sc_tracer_run_threads(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits,
+                                uint8_t *occ, int threads, double *seconds)
+{
+    if (threads < 1 || threads > SC_TRACER_MAX_THREADS)
+        return SC_ERR_INVALID_ARGUMENT;
+    pool_job j;
+    j.t = t, j.rays = rays, j.n = n, j.hits = hits, j.occ = occ;
+    atomic_init(&j.next, 0);
+    atomic_init(&j.failed, 0);
+    pthread_t tid[SC_TRACER_MAX_THREADS];
+    int started[SC_TRACER_MAX_THREADS] = { 0 };
+    double t0 = sc_now_seconds();
+    for (int k = 1; k < threads; k++)
+        started[k] = pthread_create(&tid[k], NULL, pool_worker, &j) == 0;
+    pool_worker(&j);
+    for (int k = 1; k < threads; k++)
+        if (started[k])
+            pthread_join(tid[k], NULL);
+    if (seconds)
+        *seconds = sc_now_seconds() - t0;
+    return atomic_load(&j.failed) ? SC_ERR_INVALID_ARGUMENT : SC_OK;
+}
+
+/* ---- judging and lighting -------------------------------------------------- */
+
+int sc_same_hit(const sc_hitrec *a, const sc_hitrec *b, float rel)
+{
+    if (a->prim == b->prim)
+        return a->prim == SC_HITREC_MISS || fabsf(a->t - b->t) <= rel * fabsf(b->t);
+    if (a->prim == SC_HITREC_MISS || b->prim == SC_HITREC_MISS)
+        return 0;
+    return fabsf(a->t - b->t) <= rel * fabsf(b->t);
+}
+
+void sc_light_point(const sc_light *lights, size_t nlights, const float lo[3], const float hi[3], float out[3])
+{
+    double c[3], diag = 0;
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5 * ((double)lo[k] + hi[k]);
+        diag += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+    }
+    diag = sqrt(diag);
+    for (size_t i = 0; i < nlights; i++)
+        if (lights[i].type == SC_LIGHT_POINT) {
+            memcpy(out, lights[i].vec, 3 * sizeof(float));
+            return;
+        }
+    for (size_t i = 0; i < nlights; i++)
+        if (lights[i].type == SC_LIGHT_DIRECTIONAL) {
+            for (int k = 0; k < 3; k++)
+                out[k] = (float)(c[k] - 2 * diag * lights[i].vec[k]);
+            return;
+        }
+    const double d[3] = { 0.3, 1.0, 0.2 };
+    for (int k = 0; k < 3; k++)
+        out[k] = (float)(c[k] + 2 * diag * d[k]);
+}

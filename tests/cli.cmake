@@ -1,0 +1,8 @@
+# The shared helpers (src/common), the comparison harness (src/compare/
+# tracer.h) and the command line's parsing, help and output-file contract.
+sc_add_test(test_common SOURCES test_common.c LIBS spherecull_common)
+sc_add_test(test_tracer SOURCES test_tracer.c LIBS spherecull_compare)
+if(TARGET spherecull_cli)
+  add_test(NAME cli_options
+           COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/cli_options.sh $<TARGET_FILE:spherecull_cli> ${PROJECT_VERSION})
+endif()

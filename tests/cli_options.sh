@@ -1,0 +1,62 @@
+#!/bin/sh
+# The command line's contract: --version, 'help CMD' equal to 'CMD --help'
+# in one layout, --opt=value and --, one error line for usage errors,
+# output files with the umask's mode, and CSV fields quoted.
+#
+#   tests/cli_options.sh path/to/spherecull VERSION
+set -u
+S=${1:?usage: cli_options.sh SPHERECULL VERSION}
+V=${2:?usage: cli_options.sh SPHERECULL VERSION}
+case $S in /*) ;; *) S=$(cd "$(dirname "$S")" && pwd)/$(basename "$S") ;; esac
+dir=$(mktemp -d "${TMPDIR:-/tmp}/sc_cli_opts.XXXXXX") || exit 1
+trap 'rm -rf "$dir"' EXIT INT TERM
+cd "$dir" || exit 1
+fail=0
+no() { echo "FAIL  $*"; fail=1; }
+
+[ "$("$S" --version)" = "spherecull $V" ] || no "--version does not print 'spherecull $V'"
+
+for c in accuracy bench bench-spheres compare raster raster-check render; do
+  "$S" help "$c" > help.txt || no "help $c: exit status $?"
+  "$S" "$c" --help > dash.txt || no "$c --help: exit status $?"
+  cmp -s help.txt dash.txt || no "help $c differs from $c --help"
+  head -n 1 help.txt | grep -q "^usage: spherecull $c " || no "$c --help: first line is not 'usage: spherecull $c ...'"
+  grep -q '^options:$' help.txt || no "$c --help: no 'options:' section"
+  grep -q '^  -h, --help              this help$' help.txt || no "$c --help: the help line is not in the common layout"
+done
+"$S" help render | grep -q -- '--leaf N .*(default: 8)$' || no "render --help does not state the --leaf default"
+
+# usage errors: exit 2, exactly one line on stderr
+one_line() {
+  expect=$1; shift
+  "$S" "$@" > /dev/null 2> err.txt
+  rc=$?
+  [ "$rc" -eq "$expect" ] || no "$*: exit status $rc, wanted $expect"
+  [ "$(wc -l < err.txt)" -eq 1 ] || no "$*: $(wc -l < err.txt) lines on stderr"
+  grep -q '^spherecull: ' err.txt || no "$*: stderr does not start with 'spherecull: '"
+}
+one_line 2 help no-such-command
+one_line 2 render proc:sphere:200 --width
+one_line 2 render proc:sphere:200 -o x.png --width=0
+one_line 2 compare proc:sphere:200 --bogus
+one_line 2 bench proc:sphere:200 --threads=1,,2
+one_line 2 raster-check proc:sphere:200 --prefilter=sometimes
+
+# --opt=value and -- (an operand after -- is never an option)
+"$S" accuracy --n=3 --seed=2 > acc.txt || no "accuracy --n=3 --seed=2: exit status $?"
+grep -q '3 triangles per family, seed 2' acc.txt || no "accuracy --n=3 --seed=2 did not take the values"
+umask 027
+"$S" render -q --output=r.png --width=8 --height=6 -- proc:sphere:200 || no "render ... -- SCENE: exit status $?"
+[ -f r.png ] || no "render --output=r.png wrote no file"
+[ "$(stat -c %a r.png 2>/dev/null)" = 640 ] || no "r.png has mode $(stat -c %a r.png 2>/dev/null), wanted 640 (umask 027)"
+
+# a scene name with a comma stays one CSV field
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n' > 'a,b.obj'
+"$S" compare 'a,b.obj' --repeats 1 --count 64 --oracle-rays 8 --width 16 --rays primary \
+    --tracers spherecull-off --threads 1 --csv=c.csv > /dev/null 2>&1 || no "compare a,b.obj: exit status $?"
+sed -n 2p c.csv | grep -q '^"a,b.obj",4,primary,spherecull-off,' || no "compare --csv: scene 'a,b.obj' not quoted: $(sed -n 2p c.csv)"
+[ "$(stat -c %a c.csv 2>/dev/null)" = 640 ] || no "c.csv has mode $(stat -c %a c.csv 2>/dev/null), wanted 640"
+[ "$(ls -A | grep -c tmp)" -eq 0 ] || no "temporary files left: $(ls -A | grep tmp)"
+
+[ "$fail" -eq 0 ] && echo "cli_options: all passed"
+exit "$fail"
