@@ -10,7 +10,7 @@
 #include <embree3/rtcore.h>
 
 #include "spherecull/sc_embree.h"
-#include "watertight.h"
+#include "trace/tri_watertight.h"
 
 enum { MAX_CLUSTER = 16 };
 
@@ -294,13 +294,16 @@ cluster_n(const sc_embree *e, sc_embree_counters *ctr, const int *valid, unsigne
         uint32_t live = live_lanes(e, c, &r, ctr);
         if (!live)
             continue;
-        wt_ray wr;
-        wt_ray_init(&wr, r.org, r.dir);
+        sc_ray_pre pre;
+        sc_ray_precompute_shear(&r, &pre);
         while (live) {
             int j = __builtin_ctz(live);
             live &= live - 1;
-            float t, u, v;
-            int h = wt_intersect(&wr, e->tri[c * w + (size_t)j], r.tmin, r.tmax, &t, &u, &v);
+            /* A cluster triangle (9 floats) is a leaf block of width 1. The
+             * hit interval is [tmin, tmax): of equal t the first found stays. */
+            float t, un, vn, den;
+            int h = sc_tri_watertight(&pre, e->tri[c * w + (size_t)j], 1, 0, r.tmin, r.tmax, &t, &un, &vn, &den) &&
+                    t < r.tmax;
             if (ctr) {
                 ctr->tri_tests++;
                 ctr->tri_hits += (uint64_t)h;
@@ -322,8 +325,8 @@ cluster_n(const sc_embree *e, sc_embree_counters *ctr, const int *valid, unsigne
             RAYN(hit, 0) = e1[1] * e2[2] - e1[2] * e2[1];
             RAYN(hit, 1) = e1[2] * e2[0] - e1[0] * e2[2];
             RAYN(hit, 2) = e1[0] * e2[1] - e1[1] * e2[0];
-            RAYN(hit, 3) = u;
-            RAYN(hit, 4) = v;
+            RAYN(hit, 3) = un / den;
+            RAYN(hit, 4) = vn / den;
             RAYN_U(hit, 5) = e->prim[c * w + (size_t)j];
             RAYN_U(hit, 6) = geomID;
             RAYN_U(hit, 7) = instID;

@@ -99,6 +99,25 @@ SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, i
     *kx_out = kx, *ky_out = ky, *kz_out = kz;
 }
 
+/* Only what the watertight and Moller lane tests read (origin, direction,
+ * shear): for callers that test triangles without a BVH (the Embree
+ * user-geometry back end). Sz = 1/d[kz] is the value sc_ray_precompute
+ * computes, so the lane tests give the same bits either way. */
+SC_TRACE_INLINE void sc_ray_precompute_shear(const sc_ray *r, sc_ray_pre *p)
+{
+    for (int k = 0; k < 3; k++)
+        p->org[k] = r->org[k], p->dir[k] = r->dir[k];
+    p->tmin = r->tmin;
+    p->tmax = r->tmax;
+    const float *d = r->dir;
+    int kx, ky, kz;
+    sc_shear_axes(d, &kx, &ky, &kz);
+    p->kx = kx, p->ky = ky, p->kz = kz;
+    p->Sx = d[kx] / d[kz];
+    p->Sy = d[ky] / d[kz];
+    p->Sz = 1.0f / d[kz];
+}
+
 /* root_lo/root_hi: the BVH's root box (ignored when it has none). */
 SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const float root_lo[3],
                                      const float root_hi[3])
