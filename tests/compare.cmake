@@ -1,6 +1,6 @@
 # Ray sets, the exact oracle and the Embree side by side (issue 5).
 sc_add_test(test_rays SOURCES test_rays.c LIBS spherecull_compare)
-sc_add_test(test_oracle SOURCES test_oracle.c LIBS spherecull_compare)
+sc_add_test(test_oracle SOURCES test_oracle.c LIBS spherecull_compare FTZ)
 if(TARGET spherecull_embree)
-  sc_add_test(test_embree SOURCES test_embree.c LIBS spherecull_compare spherecull_embree)
+  sc_add_test(test_embree SOURCES test_embree.c LIBS spherecull_compare spherecull_embree FTZ)
 endif()
