@@ -134,14 +134,22 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
          * m >= M(1 - u) and 5 % slack for the roundings of these few
          * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and
          * then fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny
-         * terms cover underflow of the products and a subnormal rd; the
-         * 2^-148 in g keeps g >= |o| C + m C when it underflows, because
-         * |rd| (up to 1e18) multiplies g's rounding error (found by
-         * tests/test_slab.c on coordinates near 1e-40). */
+         * terms are normal numbers (MIN = 2^-126) so that they hold with
+         * gradual underflow and with MXCSR FTZ|DAZ (subnormal results and
+         * operands read as 0) alike:
+         *  - 2^-123 = 8 MIN in g, multiplied by |rd| (up to 1e18): a plane
+         *    or origin coordinate that DAZ reads as 0 (< MIN each), and g's
+         *    own underflow (< MIN), each shift a distance by < MIN |rd|;
+         *  - m 2^-124: an rd that underflows (|d| > 2^126) is off by < M 2^-126
+         *    in distance, flushed to 0 by FTZ entirely (|tau| <= M 2^-126);
+         *  - 2^-122 = 16 MIN: underflow of o rd, of the pad, of fl(o rd) + E
+         *    and of the slab FMA itself, < MIN each.
+         * (tests/test_slab.c checks it against MPFR in both modes, on
+         * coordinates near 1e-40.) */
         float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
         mk[k] = m;
-        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-148f));
-        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-147f, 0x1p-140f));
+        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
+        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-124f, 0x1p-122f));
         float ord = p->org[k] * p->rd[k];
         p->ord_near[k] = ord + pad;
         p->ord_far[k] = ord - pad;
@@ -194,7 +202,7 @@ SC_TRACE_INLINE unsigned sc_slab(const sc_ray_pre *p, const sc_bvh_node8 *node, 
  * (lo = +inf, hi = -inf) still give an empty interval. */
 #define SC_SLAB_DOWN (1.0f - 0x1p-21f)
 #define SC_SLAB_UP (1.0f + 0x1p-21f)
-#define SC_SLAB_PAR_EPS 0x1p-140f
+#define SC_SLAB_PAR_EPS 0x1p-122f   /* normal: survives DAZ (16 MIN of underflow) */
 SC_TRACE_INLINE unsigned sc_slab_par(const sc_ray_pre *p, const sc_bvh_node8 *node, float tmin, float tmax,
                                    float *dist)
 {
