@@ -94,8 +94,8 @@ SC_TRACE_INLINE int sc_ray_parallel(const sc_ray *r)
 SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
 {
     float S = (m[0] + m[1]) + m[2];
-    *xK = fmaf(S, SC_X_KS, 0x1p-149f);
-    *xc0 = fmaf(S * S, SC_X_CS, 0x1p-124f);
+    *xK = fmaf(S, SC_X_KS, 0x1p-123f);    /* floors normal: FTZ|DAZ (exact_tri.c) */
+    *xc0 = fmaf(S * S, SC_X_CS, 0x1p-121f);
 }
 
 /* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other

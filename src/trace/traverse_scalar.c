@@ -120,7 +120,7 @@ static inline int lane_exact(const sc_ray_pre *p, const float *rows, unsigned W,
     float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
     float q = fmaf(R, E1 * SC_X_K606, SC_X_FLOOR_N);
     float e = fmaf(q, fabsf(inv), fmaf(Z, SC_X_K15U, fmaf(fabsf(tt), SC_X_K3U, SC_X_FLOOR_T)));
-    if (!(e < INFINITY))
+    if (!(e < INFINITY) || !(fabsf(inv) >= 0x1p-126f))   /* 1/det subnormal or flushed: undecided */
         return 1;
     if (tt - e > tmax || tt + e < tmin)
         return 0;
