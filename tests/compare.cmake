@@ -3,4 +3,6 @@ sc_add_test(test_rays SOURCES test_rays.c LIBS spherecull_compare)
 sc_add_test(test_oracle SOURCES test_oracle.c LIBS spherecull_compare FTZ)
 if(TARGET spherecull_embree)
   sc_add_test(test_embree SOURCES test_embree.c LIBS spherecull_compare spherecull_embree FTZ)
+  # sc_rtcray.h's RTCRay offsets against embree3/rtcore_ray.h.
+  sc_add_test(test_rtcray SOURCES test_rtcray.c LIBS spherecull_embree)
 endif()

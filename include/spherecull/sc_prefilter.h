@@ -38,7 +38,8 @@
 extern "C" {
 #endif
 
-/* 32 bytes, laid out like Embree's RTCRay prefix. */
+/* 32 bytes. Not an Embree RTCRay (that has `time` where this has tmax): from
+ * Embree, convert with sc_ray_from_rtc (sc_rtcray.h), never cast. */
 typedef struct sc_ray {
     float org[3];
     float tmin;
