@@ -10,3 +10,9 @@ if(TARGET spherecull_scene)
               ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
   target_compile_definitions(test_scene_modes PRIVATE SC_SCENES_DIR="${PROJECT_SOURCE_DIR}/scenes")
 endif()
+
+# Concurrency as the headers state it: 4 threads trace one BVH while 2 build
+# and free their own, every trace ISA. Label tsan: scripts/test.sh --tsan
+# builds only this under ThreadSanitizer and runs it.
+find_package(Threads REQUIRED)
+sc_add_test(test_threads SOURCES test_threads.c LIBS Threads::Threads FTZ LABELS tsan)
