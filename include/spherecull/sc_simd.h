@@ -8,6 +8,21 @@
  * sc_reject4/8/16 masks of sc_prefilter.h). The library never prints: call
  * sc_simd_init() to learn whether SPHERECULL_ISA was honoured.
  *
+ * Threads. The kernel table is one process-wide pointer, published
+ * atomically: racing first uses from many threads agree on one choice, and
+ * every batch and mask function may run from any number of threads at once
+ * (each reads the table once per call). SPHERECULL_ISA is read once, at that
+ * first use. sc_isa_force is global too: it is itself free of data races,
+ * but a call running concurrently may finish on the old table, and since
+ * AVX2/AVX-512 batch results differ from the others in the last bits (FMA),
+ * call it before starting threads (or while none runs a kernel) if results
+ * must not mix. It never changes the kernels of an already built sc_bvh
+ * (sc_bvh_config.isa).
+ *
+ * MXCSR modes. The guarantees of the conservative kinds (every vertex inside)
+ * and of the masks hold with gradual underflow and with FTZ|DAZ set in the
+ * calling thread (sc_circumsphere.h, sc_prefilter.h), for every ISA.
+ *
  * Batch spheres. Triangles come from a vertex buffer + index buffer or from
  * pre-gathered SoA arrays; spheres go to SoA arrays cx, cy, cz, r2 that the
  * caller allocates with room for sc_simd_padded(count) entries (a multiple
@@ -76,7 +91,7 @@ sc_status sc_simd_init(void);
 sc_isa sc_isa_active(void);
 
 /* Switches every kernel to `isa` (for tests, benchmarks and the CLI's --isa;
- * not to be called while other threads run kernels). SC_ERR_UNSUPPORTED if
+ * global: see "Threads" above for when to call it). SC_ERR_UNSUPPORTED if
  * the CPU or build lacks it (the active level is then unchanged). */
 sc_status sc_isa_force(sc_isa isa);
 
