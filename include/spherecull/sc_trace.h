@@ -58,7 +58,10 @@
  * -U(b,a) still holds) and a flushed zero takes the double fallback. With
  * DAZ, a subnormal ray or vertex coordinate is read as 0 by the float
  * stages; SC_TRI_EXACT's exact stage still decides for the given bits.
- * Both modes are tested (tests registered as <name>_ftz).
+ * Both modes are tested (tests registered as <name>_ftz). Two corners are
+ * not covered under DAZ (docs/numerics.md): a ray with some |d_k| < 1e-18
+ * whose origin or box coordinate on that axis is subnormal, and a ray whose
+ * largest direction component is below 2^-95 with another one subnormal.
  */
 #ifndef SPHERECULL_SC_TRACE_H
 #define SPHERECULL_SC_TRACE_H
