@@ -3,5 +3,5 @@
 # ../shared/scenes when it exists and is skipped otherwise.
 if(TARGET spherecull_compare AND TARGET spherecull_scene)
   sc_add_test(test_exact_tri SOURCES test_exact_tri.c LIBS spherecull_compare spherecull_scene
-              ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
+              ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes FTZ)
 endif()

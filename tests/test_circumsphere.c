@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "sc_accuracy.h"
+#include "sc_ftz.h"
 #include "sc_families.h"
 
 enum { PER_FAMILY = 10000 };
@@ -63,7 +64,9 @@ static void check_family(sc_family fam)
     long out_of_bound = 0, containment = 0, wrong_status = 0, nan_out = 0, degenerate_ok = 0;
     for (int t = 0; t < PER_FAMILY; t++) {
         double V[3][3];
+        unsigned csr = sc_test_ftz_off();
         sc_family_triangle(fam, &rng, as_float, V);
+        sc_test_ftz_restore(csr);
         sc_acc_ref_compute(&ref, V);
         for (int v = 0; v < nv; v++) {
             const sc_acc_variant *var = &variants[v];
@@ -148,6 +151,7 @@ FAMILY_TEST(SC_FAM_FAR_1E3)
 FAMILY_TEST(SC_FAM_FAR_1E4)
 FAMILY_TEST(SC_FAM_FAR_1E5)
 FAMILY_TEST(SC_FAM_SCALE_1EM20)
+FAMILY_TEST(SC_FAM_SCALE_1EM30)
 FAMILY_TEST(SC_FAM_SCALE_1E18)
 FAMILY_TEST(SC_FAM_RIGHT)
 FAMILY_TEST(SC_FAM_DUPLICATE)
@@ -289,6 +293,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_SC_FAM_FAR_1E4),
         cmocka_unit_test(test_SC_FAM_FAR_1E5),
         cmocka_unit_test(test_SC_FAM_SCALE_1EM20),
+        cmocka_unit_test(test_SC_FAM_SCALE_1EM30),
         cmocka_unit_test(test_SC_FAM_SCALE_1E18),
         cmocka_unit_test(test_SC_FAM_RIGHT),
         cmocka_unit_test(test_SC_FAM_DUPLICATE),

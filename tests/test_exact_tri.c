@@ -17,6 +17,7 @@
  *     rays shows what is being fixed;
  *   - the shared meshes in $SC_TEST_SCENES (skipped when absent).
  */
+#include <limits.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -38,6 +39,7 @@
 #include "spherecull/sc_trace.h"
 #include "trace/tri_exact.h"
 
+#include "sc_ftz.h"
 #include "sc_test_meshes.h"
 #include "sc_test_checked.h"
 
@@ -47,7 +49,7 @@ static const int LEAVES[] = { 1, 4, 16 };
 
 /* sign of D.((P-O) x (Q-O)): every float is exact at 2000 bits and so is
  * every difference and product of the (bounded-exponent) inputs here */
-static int mp_vol_sign(const sc_ray *r, const float P[3], const float Q[3])
+static int mp_vol_sign_gradual(const sc_ray *r, const float P[3], const float Q[3])
 {
     mpfr_t a[3], b[3], d[3], x, y, s;
     mpfr_inits2(2000, x, y, s, (mpfr_ptr)0);
@@ -73,11 +75,31 @@ static int mp_vol_sign(const sc_ray *r, const float P[3], const float Q[3])
     return sg;
 }
 
-static int mp_hit(const sc_ray *r, const float v[9], mpfr_t t)
+/* mp_vol_sign_gradual with gradual underflow whatever the mode under test
+ * (sc_ftz.h): inputs and references never run flushed. */
+static int mp_vol_sign(const sc_ray *r, const float P[3], const float Q[3])
+{
+    unsigned csr = sc_test_ftz_off();
+    int res = mp_vol_sign_gradual(r, P, Q);
+    sc_test_ftz_restore(csr);
+    return res;
+}
+
+static int mp_hit_gradual(const sc_ray *r, const float v[9], mpfr_t t)
 {
     const double O[3] = { r->org[0], r->org[1], r->org[2] }, D[3] = { r->dir[0], r->dir[1], r->dir[2] };
     const double A[3] = { v[0], v[1], v[2] }, B[3] = { v[3], v[4], v[5] }, C[3] = { v[6], v[7], v[8] };
     return sc_ref_ray_triangle_mpfr(O, D, r->tmin, r->tmax, A, B, C, t);
+}
+
+/* mp_hit_gradual with gradual underflow whatever the mode under test
+ * (sc_ftz.h): inputs and references never run flushed. */
+static int mp_hit(const sc_ray *r, const float v[9], mpfr_t t)
+{
+    unsigned csr = sc_test_ftz_off();
+    int res = mp_hit_gradual(r, v, t);
+    sc_test_ftz_restore(csr);
+    return res;
 }
 
 /* ---- configurations ------------------------------------------------------- */
@@ -96,6 +118,17 @@ static float nudge(float x, int ulps)
     return x;
 }
 
+/* The scale family under test: INT_MIN = mixed 2^-60 .. 2^40; else every
+ * configuration at 2^g_scale_e (tiny 2^-66 ~ 1e-20 and 2^-100 ~ 1e-30, huge
+ * 2^46 ~ 7e13: origins, up to 2^12 scales away, reach ~3e17, just below
+ * sc_trace's 1e18 limit). */
+static int g_scale_e = INT_MIN;
+static size_t scale_from_state(void **state, size_t n)
+{
+    g_scale_e = *state ? *(const int *)*state : INT_MIN;
+    return *state ? n / 4 : n;
+}
+
 typedef struct config {
     int n;                   /* triangles */
     float v[3][9];
@@ -103,9 +136,11 @@ typedef struct config {
 } config;
 
 /* One random configuration of kind k; s = the exponent of its scale. */
-static void make_config(sc_rng *g, int k, config *c)
+static void make_config_gradual(sc_rng *g, int k, config *c)
 {
     int e = (int)sc_rng_range(g, -60, 40);    /* origins stay below 1e18 (sc_trace's limit) */
+    if (g_scale_e != INT_MIN)
+        e = g_scale_e;
     double sc = ldexp(1, e);
     memset(c, 0, sizeof *c);
     c->n = 1;
@@ -213,6 +248,15 @@ static void make_config(sc_rng *g, int k, config *c)
         c->ray.dir[2] = 1;
 }
 
+/* make_config_gradual with gradual underflow whatever the mode under test
+ * (sc_ftz.h): inputs and references never run flushed. */
+static void make_config(sc_rng *g, int k, config *c)
+{
+    unsigned csr = sc_test_ftz_off();
+    make_config_gradual(g, k, c);
+    sc_test_ftz_restore(csr);
+}
+
 /* ---- the predicates ------------------------------------------------------- */
 
 static void test_predicates_vs_mpfr(void **state)
@@ -220,7 +264,7 @@ static void test_predicates_vs_mpfr(void **state)
     (void)state;
     sc_rng g;
     sc_rng_seed(&g, 101);
-    size_t zeros = 0, n = 60000, hits = 0, ties = 0;
+    size_t zeros = 0, n = scale_from_state(state, 60000), hits = 0, ties = 0;
     mpfr_t ta, tb;
     mpfr_inits2(64, ta, tb, (mpfr_ptr)0);
     for (size_t i = 0; i < n; i++) {
@@ -249,7 +293,8 @@ static void test_predicates_vs_mpfr(void **state)
         }
     }
     mpfr_clears(ta, tb, (mpfr_ptr)0);
-    print_message("%zu configurations: %zu exact-zero volumes, %zu hits, %zu exact t ties\n", n, zeros, hits, ties);
+    print_message("%zu configurations (scale %s2^%d): %zu exact-zero volumes, %zu hits, %zu exact t ties\n", n,
+                  g_scale_e == INT_MIN ? "mixed, not " : "", g_scale_e == INT_MIN ? 0 : g_scale_e, zeros, hits, ties);
     assert_true(zeros > n / 10 && hits > n / 10 && ties > 100);
 }
 
@@ -257,7 +302,7 @@ static void test_predicates_vs_mpfr(void **state)
 
 /* The closest hit MPFR finds among the configuration's triangles: *best =
  * -1 on a miss; tie[i] = 1 for every triangle at the smallest exact t. */
-static void mp_closest(const config *c, int *best, int tie[3])
+static void mp_closest_gradual(const config *c, int *best, int tie[3])
 {
     mpfr_t t[3];
     int h[3];
@@ -274,12 +319,21 @@ static void mp_closest(const config *c, int *best, int tie[3])
         mpfr_clear(t[i]);
 }
 
+/* mp_closest_gradual with gradual underflow whatever the mode under test
+ * (sc_ftz.h): inputs and references never run flushed. */
+static void mp_closest(const config *c, int *best, int tie[3])
+{
+    unsigned csr = sc_test_ftz_off();
+    mp_closest_gradual(c, best, tie);
+    sc_test_ftz_restore(csr);
+}
+
 static void test_tiny_scenes(void **state)
 {
     (void)state;
     sc_rng g;
     sc_rng_seed(&g, 202);
-    size_t n = 12000, bad_wt = 0, checked = 0;
+    size_t n = scale_from_state(state, 12000), bad_wt = 0, checked = 0;
     uint32_t idx[9] = { 0, 1, 2, 3, 4, 5, 6, 7, 8 };
     for (size_t i = 0; i < n; i++) {
         config c;
@@ -317,7 +371,8 @@ static void test_tiny_scenes(void **state)
             }
         }
     }
-    print_message("%zu traced configurations agree with MPFR (watertight: %zu disagree)\n", checked, bad_wt);
+    print_message("%zu traced configurations (scale %s2^%d) agree with MPFR (watertight: %zu disagree)\n", checked,
+                  g_scale_e == INT_MIN ? "mixed, not " : "", g_scale_e == INT_MIN ? 0 : g_scale_e, bad_wt);
     assert_true(bad_wt > 0);         /* the configurations do defeat a float test */
 }
 
@@ -592,9 +647,16 @@ static void test_shared_scenes(void **state)
 
 int main(void)
 {
+    static int scale_1em20 = -66, scale_1em30 = -100, scale_huge = 46;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_predicates_vs_mpfr),
         cmocka_unit_test(test_tiny_scenes),
+        cmocka_unit_test_prestate(test_predicates_vs_mpfr, (void *)&scale_1em20),
+        cmocka_unit_test_prestate(test_tiny_scenes, (void *)&scale_1em20),
+        cmocka_unit_test_prestate(test_predicates_vs_mpfr, (void *)&scale_1em30),
+        cmocka_unit_test_prestate(test_tiny_scenes, (void *)&scale_1em30),
+        cmocka_unit_test_prestate(test_predicates_vs_mpfr, (void *)&scale_huge),
+        cmocka_unit_test_prestate(test_tiny_scenes, (void *)&scale_huge),
         cmocka_unit_test(test_closed_meshes),
         cmocka_unit_test(test_open_meshes),
         cmocka_unit_test(test_lattice),

@@ -41,6 +41,7 @@
 #include "spherecull/sc_trace.h"
 #include "trace/tri_watertight.h"
 
+#include "sc_ftz.h"
 #include "sc_test_meshes.h"
 #include "sc_test_checked.h"
 
@@ -242,7 +243,7 @@ static void test_float_edge_sign_exact(void **state)
 }
 
 /* The tracer's 2D decision (float edge functions, sc_watertight_double on
- * an exact zero), written out as in traverse_scalar.c's lane_watertight. */
+ * an exact zero), written out as in tri_watertight.h's sc_tri_watertight. */
 static int lane2d(const float P[3][2], const float z[3])
 {
     float Ax = P[0][0], Ay = P[0][1], Bx = P[1][0], By = P[1][1], Cx = P[2][0], Cy = P[2][1];
@@ -407,18 +408,29 @@ static void check_oracle_consistent(const sc_oracle *o)
     }
 }
 
+/* Set for meshes so small that the float triangle test's edge products
+ * (coordinates ~1e-20 squared) are subnormal or flushed: its t then carries
+ * an absolute error as large as t's differences between neighbours, and the
+ * tree search and brute force may settle on different near-tied triangles.
+ * Holes are still counted and must be 0; the disagreements are reported. */
+static int g_subnormal_products;
+
 static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t seed)
 {
+    size_t not_brute_total = 0;
     sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt };
     sc_checked_mesh cm = sc_test_checked(&m);
     int closed = 0;
     assert_int_equal(sc_mesh_is_closed(&cm, &closed), SC_OK);
     assert_true(closed);
     sc_rayset set;
-    assert_int_equal(sc_rayset_adversarial(&cm, nrays, seed, &set), SC_OK);
     sc_oracle o;
+    /* rays and the oracle with gradual underflow in both modes (sc_ftz.h) */
+    unsigned csr = sc_test_ftz_off();
+    assert_int_equal(sc_rayset_adversarial(&cm, nrays, seed, &set), SC_OK);
     assert_int_equal(sc_oracle_run(&cm, set.rays, set.count, 2, SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT, &o),
                      SC_OK);
+    sc_test_ftz_restore(csr);
     check_oracle_consistent(&o);
     const int leaves[] = { 1, 4, 16 };
     size_t configs = 0;
@@ -457,10 +469,15 @@ static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t se
                 assert_true(tl.graze_rays > 0);
                 assert_int_equal(tl.holes, 0);
                 assert_int_equal(tl.any_holes, 0);
-                assert_int_equal(tl.not_brute, 0);
+                if (!g_subnormal_products)
+                    assert_int_equal(tl.not_brute, 0);
+                not_brute_total += tl.not_brute;
                 sc_bvh_free(bvh);
             }
     }
+    if (g_subnormal_products)
+        print_message("%s: traversal != brute (subnormal products, not asserted): %zu over all configurations\n",
+                      name, not_brute_total);
     free(bt);
     sc_oracle_free(&o);
     sc_rayset_free(&set);
@@ -474,6 +491,27 @@ static void test_torus(void **state)
     torus(&m, 72, 36, off, 1.0);
     run_mesh("torus", &m, 6000, 3);
     mesh_free(&m);
+}
+
+/* The torus at the scales the float filters and pads are bounded for, in
+ * both MXCSR modes: tiny (1e-20, 1e-30: squared lengths below FLT_MIN) and
+ * huge (1e17 off the origin: rays from up to ~5e17, below the 1e18 limit). */
+static void test_torus_scales(void **state)
+{
+    (void)state;
+    static const double scales[3] = { 1e-20, 1e-30, 1e16 };
+    static const char *const names[3] = { "torus 1e-20", "torus 1e-30", "torus 1e16 at 1e17" };
+    for (int i = 0; i < 3; i++) {
+        mesh m;
+        const double off[3] = { 3.1 * scales[i], -1.7 * scales[i], (i == 2 ? 1e17 : 0.45 * scales[i]) };
+        unsigned csr = sc_test_ftz_off();
+        torus(&m, 48, 24, off, scales[i]);
+        sc_test_ftz_restore(csr);
+        g_subnormal_products = i < 2;
+        run_mesh(names[i], &m, 2000, 13 + (uint64_t)i);
+        g_subnormal_products = 0;
+        mesh_free(&m);
+    }
 }
 
 static void test_bumpy_sphere(void **state)
@@ -558,6 +596,7 @@ int main(void)
         cmocka_unit_test(test_float_edge_sign_exact),
         cmocka_unit_test(test_fan_mixed_fallback),
         cmocka_unit_test(test_torus),
+        cmocka_unit_test(test_torus_scales),
         cmocka_unit_test(test_bumpy_sphere),
         cmocka_unit_test(test_grid_box),
         cmocka_unit_test(test_shared_scenes),

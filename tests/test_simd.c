@@ -29,10 +29,19 @@
 
 #include "common/sc_rng.h"
 #include "sc_families.h"
+#include "sc_ftz.h"
 #include "sc_ref_ray.h"
 #include "sc_reference.h"
 #include "isa/isa_dispatch.h"
 #include "spherecull/sc_simd.h"
+
+/* Inputs generated with gradual underflow in both MXCSR modes (sc_ftz.h). */
+static void gen_triangle(sc_family f, sc_rng *rng, int as_float, double V[3][3])
+{
+    unsigned csr = sc_test_ftz_off();
+    sc_family_triangle(f, rng, as_float, V);
+    sc_test_ftz_restore(csr);
+}
 
 static sc_isa g_isa;
 static int g_supported;
@@ -131,15 +140,17 @@ static int same_bits_d(double a, double b) { return memcmp(&a, &b, sizeof a) == 
 /* Stated bound on the conservative kinds' r2 (what the padding may cost):
  * with e the centre error above and r_ref the reference radius, every
  * vertex is within r_ref (1 + e) of the computed centre, so
- *   r2 <= r_ref^2 (1 + e)^2 (1 + 32 u) + 16 denorm_min
+ *   r2 <= r_ref^2 (1 + e)^2 (1 + 32 u) + 32 MIN
+ * (MIN the smallest normal number: the pad is 16 MIN, see
+ * sc_sphere_make_conservative)
  * (the padding (1 + 8u) and the rounding of |V - c|^2 take about 15u). */
-static int r2_within_bound(const sc_ref_sphere *ref, const double c[3], double r2, double u, double tiny)
+static int r2_within_bound(const sc_ref_sphere *ref, const double c[3], double r2, double u, double min_normal)
 {
     double r2_ref = mpfr_get_d(ref->r2, MPFR_RNDU);
     if (!(r2_ref > 0))
         return 1;
     double e = sc_ref_centre_error(ref, c);
-    return r2 <= r2_ref * (1 + e) * (1 + e) * (1 + 32 * u) + 16 * tiny;
+    return r2 <= r2_ref * (1 + e) * (1 + e) * (1 + 32 * u) + 32 * min_normal;
 }
 
 static void check_family_f(sc_family fam, int method, int kind, float (*V)[3][3], size_t n,
@@ -168,7 +179,7 @@ static void check_family_f(sc_family fam, int method, int kind, float (*V)[3][3]
             }
             const sc_ref_sphere *ref = kind == SC_BATCH_PREFILTER_CIRCUM ? &ref_c[i] : &ref_m[i];
             int ok = kind == SC_BATCH_PREFILTER_CIRCUM ? ref_c_ok[i] : ref_m_ok[i];
-            if (ok && isfinite(r2) && !r2_within_bound(ref, cd, r2, u, FLT_TRUE_MIN) && ++*bound_fail <= 5)
+            if (ok && isfinite(r2) && !r2_within_bound(ref, cd, r2, u, FLT_MIN) && ++*bound_fail <= 5)
                 print_message("r2 bound: %s %s %s tri %zu: r2 %a\n", sc_family_name(fam),
                               sc_method_name((sc_method)method), spec_kind_name[kind], i, r2);
         }
@@ -211,10 +222,12 @@ static void test_batch_float(void **state)
     for (int f = 0; f < SC_FAM_COUNT; f++) {
         for (int i = 0; i < PER_FAMILY; i++) {
             double Vd[3][3];
-            sc_family_triangle((sc_family)f, &rng, 1, Vd);
+            gen_triangle((sc_family)f, &rng, 1, Vd);
+            unsigned csr = sc_test_ftz_off();     /* subnormal inputs reach the kernels as given */
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
                     V[i][k][a] = (float)Vd[k][a];
+            sc_test_ftz_restore(csr);
             {
                 rc_ok[i] = sc_ref_circumsphere(Vd[0], Vd[1], Vd[2], &rc[i]);
                 rm_ok[i] = sc_ref_minimal_sphere(Vd[0], Vd[1], Vd[2], &rm[i]);
@@ -256,7 +269,7 @@ static void test_batch_double(void **state)
     sc_ref_sphere_init(&ref);
     for (int f = 0; f < SC_FAM_COUNT; f++) {
         for (int i = 0; i < N; i++)
-            sc_family_triangle((sc_family)f, &rng, 0, V[i]);
+            gen_triangle((sc_family)f, &rng, 0, V[i]);
         for (int m = 0; m < SC_METHOD_COUNT; m++)
             for (int k = 0; k < SC_BATCH_KIND_COUNT; k++) {
                 sc_spheres_soad o = { out, out + pad, out + 2 * pad, out + 3 * pad };
@@ -278,7 +291,7 @@ static void test_batch_double(void **state)
                                 contain_fail++;
                         int rok = circ ? sc_ref_circumsphere(V[i][0], V[i][1], V[i][2], &ref)
                                        : sc_ref_minimal_sphere(V[i][0], V[i][1], V[i][2], &ref);
-                        if (rok && isfinite(r2) && !r2_within_bound(&ref, c, r2, u, DBL_TRUE_MIN))
+                        if (rok && isfinite(r2) && !r2_within_bound(&ref, c, r2, u, DBL_MIN))
                             bound_fail++;
                     }
                     if (!same && isfinite(s.r2) && isfinite(r2) && (circ || k == SC_BATCH_PREFILTER_MINIMAL) &&
@@ -355,7 +368,7 @@ static void test_fast_path_matches_general(void **state)
     float (*Vf)[3][3] = malloc(sizeof(float) * 9 * N);
     double (*Vd)[3][3] = malloc(sizeof(double) * 9 * N);
     for (int i = 0; i < N; i++) {
-        sc_family_triangle((sc_family)(i % SC_FAM_COUNT), &rng, 1, Vd[i]);
+        gen_triangle((sc_family)(i % SC_FAM_COUNT), &rng, 1, Vd[i]);
         for (int v = 0; v < 3; v++)
             for (int a = 0; a < 3; a++)
                 Vf[i][v][a] = (float)Vd[i][v][a];
@@ -416,7 +429,7 @@ static void test_streaming_large_batch(void **state)
     }
     for (size_t i = 0; i < n; i++) {
         double V[3][3];
-        sc_family_triangle(i % 97 ? SC_FAM_RANDOM : (sc_family)(i % SC_FAM_COUNT), &rng, 1, V);
+        gen_triangle(i % 97 ? SC_FAM_RANDOM : (sc_family)(i % SC_FAM_COUNT), &rng, 1, V);
         for (int v = 0; v < 3; v++)
             for (int a = 0; a < 3; a++)
                 verts[9 * i + 3 * (size_t)v + (size_t)a] = (float)V[v][a];
@@ -645,17 +658,19 @@ static void test_no_false_rejects(void **state)
     size_t hits = 0, rays_tested = 0, false_rejects = 0, rejected_misses = 0;
     static const sc_family fams[] = {
         SC_FAM_RANDOM, SC_FAM_CAP_1E6, SC_FAM_NEEDLE_1E6, SC_FAM_FAR_1E4, SC_FAM_FAR_1E5,
-        SC_FAM_SCALE_1EM20, SC_FAM_SCALE_1E18, SC_FAM_RIGHT, SC_FAM_DUPLICATE, SC_FAM_COLLINEAR,
+        SC_FAM_SCALE_1EM20, SC_FAM_SCALE_1EM30, SC_FAM_SCALE_1E18, SC_FAM_RIGHT, SC_FAM_DUPLICATE, SC_FAM_COLLINEAR,
         SC_FAM_SUBNORMAL,
     };
     for (size_t fi = 0; fi < sizeof fams / sizeof fams[0]; fi++) {
         float (*V)[3][3] = malloc(sizeof(float) * 9 * NT);
         for (int i = 0; i < NT; i++) {
             double Vd[3][3];
-            sc_family_triangle(fams[fi], &rng, 1, Vd);
+            unsigned csr = sc_test_ftz_off();
+            gen_triangle(fams[fi], &rng, 1, Vd);
             for (int k = 0; k < 3; k++)
                 for (int a = 0; a < 3; a++)
                     V[i][k][a] = (float)Vd[k][a];
+            sc_test_ftz_restore(csr);
         }
         size_t pad = sc_simd_padded(NT);
         float *out = malloc(sizeof(float) * 4 * pad);
@@ -670,6 +685,9 @@ static void test_no_false_rejects(void **state)
                 if (size == 0)
                     size = fmax(fabs((double)A[0]), 1e-30);
                 for (int r = 0; r < 14; r++) {
+                    /* Rays and the oracle's verdict with gradual underflow;
+                     * only the kernels below run in the mode under test. */
+                    unsigned csr = sc_test_ftz_off();
                     /* Target: vertex, edge point, interior point, or a plane-grazing origin. */
                     double s = sc_rng_uniform(&rng), t = sc_rng_uniform(&rng);
                     double T[3];
@@ -723,12 +741,15 @@ static void test_no_false_rejects(void **state)
                         ray.tmin = nextafterf(1, 0);
                         ray.tmax = 2;
                     }
-                    if (!isfinite(ray.org[0] + ray.org[1] + ray.org[2] + ray.dir[0] + ray.dir[1] + ray.dir[2]))
+                    if (!isfinite(ray.org[0] + ray.org[1] + ray.org[2] + ray.dir[0] + ray.dir[1] + ray.dir[2])) {
+                        sc_test_ftz_restore(csr);
                         continue;
+                    }
                     rays_tested++;
                     int hit = sc_ref_ray_triangle(O, D, ray.tmin, ray.tmax, (double[3]){ A[0], A[1], A[2] },
                                                   (double[3]){ B[0], B[1], B[2] },
                                                   (double[3]){ C[0], C[1], C[2] }, NULL);
+                    sc_test_ftz_restore(csr);
                     sc_sphere_block16 b;
                     sc_sphere_block16_init(&b);
                     int lane = i % 16;

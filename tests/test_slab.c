@@ -46,6 +46,7 @@
 #include <mpfr.h>
 
 #include "common/sc_rng.h"
+#include "sc_ftz.h"
 #include "trace/node_bvh8_slab.h"
 
 /* floats span 2^-149 .. 2^128: p - o needs 278 bits, (p - o) * float and
@@ -53,6 +54,17 @@
 #define PREC 640
 
 static mpfr_t T1, T2, Q;
+
+/* The MXCSR mode under test (sc_ftz.h). Generators and the MPFR reference
+ * (whose float-to-double conversions DAZ would zero) run with gradual
+ * underflow; only the statements in UNDER_TEST run in the mode under test. */
+static unsigned g_mode;
+#define UNDER_TEST(...)                 \
+    do {                                \
+        sc_test_ftz_restore(g_mode);    \
+        __VA_ARGS__;                    \
+        (void)sc_test_ftz_off();        \
+    } while (0)
 static int g_inexact; /* some MPFR result was rounded: no comparison can be trusted */
 #define EX(op) (g_inexact |= ((op) != 0))
 
@@ -288,7 +300,7 @@ static void check_planes(uint64_t seed, size_t cases, plane_stats *st)
         r.tmin = 0, r.tmax = INFINITY;
         assert_false(sc_ray_parallel(&r));
         sc_ray_pre pre, bare;
-        sc_ray_precompute(&r, &pre, lo, hi);
+        UNDER_TEST(sc_ray_precompute(&r, &pre, lo, hi));
         bare = pre;
         unpadded(&bare);
         for (int k = 0; k < 3; k++) {
@@ -303,8 +315,8 @@ static void check_planes(uint64_t seed, size_t cases, plane_stats *st)
             const int uf = g_underflows(o, lo[k], hi[k]);
             for (int i = 0; i < 6; i++) {
                 const float p = planes[i];
-                float tn = fmaf(p, rd, -pre.ord_near[k]);
-                float tf = fmaf(p, rd, -pre.ord_far[k]);
+                float tn, tf;
+                UNDER_TEST(tn = fmaf(p, rd, -pre.ord_near[k]), tf = fmaf(p, rd, -pre.ord_far[k]));
                 float t0 = fmaf(p, rd, -bare.ord_near[k]);
                 mp_diff(diff, p, o);
                 st->evals += 2;
@@ -519,11 +531,12 @@ static void check_nodes(uint64_t seed, size_t nodes, node_stats *st, size_t per_
         st->exact_through += (size_t)exact_through;
 
         sc_ray_pre pre, bare;
-        sc_ray_precompute(&r, &pre, rlo, rhi);
+        UNDER_TEST(sc_ray_precompute(&r, &pre, rlo, rhi));
         bare = pre;
         unpadded(&bare);
         float dist[SC_BVH_N], dist0[SC_BVH_N];
-        unsigned mask = sc_slab(&pre, &node, r.tmin, r.tmax, dist);
+        unsigned mask;
+        UNDER_TEST(mask = sc_slab(&pre, &node, r.tmin, r.tmax, dist));
         unsigned mask0 = sc_slab(&bare, &node, r.tmin, r.tmax, dist0);
         st->nodes++;
         for (int i = 0; i < SC_BVH_N; i++) {
@@ -612,6 +625,7 @@ static int teardown(void **state)
 
 int main(void)
 {
+    g_mode = sc_test_ftz_off();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_planes),
         cmocka_unit_test(test_nodes),

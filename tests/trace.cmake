@@ -1,8 +1,8 @@
 # BVH + traversal tests (src/bvh, src/trace). The bunny case reads
 # ../shared/scenes/bunny.obj when it exists and is skipped otherwise.
 sc_add_test(test_bvh SOURCES test_bvh.c
-            ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
-sc_add_test(test_bvh_watertight SOURCES test_bvh_watertight.c)
+            ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes FTZ)
+sc_add_test(test_bvh_watertight SOURCES test_bvh_watertight.c FTZ)
 
 # Prefilter modes never change an answer, on every shipped and shared scene.
 if(TARGET spherecull_scene)
@@ -10,3 +10,9 @@ if(TARGET spherecull_scene)
               ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes)
   target_compile_definitions(test_scene_modes PRIVATE SC_SCENES_DIR="${PROJECT_SOURCE_DIR}/scenes")
 endif()
+
+# Concurrency as the headers state it: 4 threads trace one BVH while 2 build
+# and free their own, every trace ISA. Label tsan: scripts/test.sh --tsan
+# builds only this under ThreadSanitizer and runs it.
+find_package(Threads REQUIRED)
+sc_add_test(test_threads SOURCES test_threads.c LIBS Threads::Threads FTZ LABELS tsan)

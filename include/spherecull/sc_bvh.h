@@ -96,7 +96,13 @@ typedef struct sc_bvh sc_bvh;
 
 void sc_bvh_config_default(sc_bvh_config *cfg);
 
-/* positions: 3 floats per vertex; indices: 3 per triangle, each < vertex_count.
+/* Threads: sc_bvh_build, sc_bvh_free and sc_bvh_get_info are reentrant. Any
+ * number of threads may build and free distinct BVHs at once, while others
+ * trace theirs (sc_trace.h); the build runs in the calling thread (no
+ * OpenMP or thread pool inside). The input arrays are only read. A BVH may
+ * be freed only when no thread traces it any more.
+ *
+ * positions: 3 floats per vertex; indices: 3 per triangle, each < vertex_count.
  * triangle_count may be 0 (every ray misses).
  * Errors: INVALID_ARGUMENT (NULL, index out of range, bad config),
  * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY.

@@ -97,13 +97,27 @@ sc_status sc_minimal_sphere_d(const double A[3], const double B[3], const double
  * vertices exactly; returns SC_OK unless an argument is invalid. A degenerate
  * circumsphere falls back to the minimal sphere's centre; non-finite input or
  * overflow yields r2 = +inf. */
+/* MXCSR modes: the containment guarantee of the prefilter spheres (here,
+ * sc_sphere_make_conservative_* and the SIMD batch kinds in sc_simd.h) holds
+ * with gradual underflow and with flush-to-zero / denormals-are-zero (FTZ,
+ * DAZ, as Embree asks renderers to set) alike, for the caller's vertices
+ * even where DAZ reads a subnormal coordinate as 0. A triangle whose sphere
+ * would be smaller than r2 = 16 MIN (edges below ~1e-19 in float) gets
+ * r2 = 16 MIN: still contained, and too small for sc_reject* to reject
+ * anything (it never rejects below allowance 2^-100, sc_prefilter.h).
+ * sc_circumsphere_* and sc_minimal_sphere_* compute in the thread's mode: with
+ * DAZ set and a subnormal coordinate in the input they return SC_ERR_RANGE
+ * (the arithmetic would see another triangle) instead of a wrong sphere.
+ * All functions here are reentrant: any number of threads may call them. */
 sc_status sc_prefilter_sphere_f(const float A[3], const float B[3], const float C[3],
                                 sc_sphere_kind kind, sc_method method, sc_spheref *out);
 sc_status sc_prefilter_sphere_d(const double A[3], const double B[3], const double C[3],
                                 sc_sphere_kind kind, sc_method method, sc_sphered *out);
 
 /* Pads a sphere so it contains the vertices exactly after rounding:
- * r2 = max_i fl(|V_i - c|^2) * (1 + 8u) + 8 * denorm_min; non-finite -> +inf.
+ * r2 = max_i fl(|V_i - c|^2) * (1 + 8u) + 16 MIN; non-finite -> +inf
+ * (MIN = FLT_MIN / DBL_MIN, the smallest normal number: the pad covers the
+ * underflow of both MXCSR modes, and r2 >= 16 MIN is never subnormal).
  * Exposed so SIMD kernels and other tracers can share the one rule. */
 void sc_sphere_make_conservative_f(const float A[3], const float B[3], const float C[3],
                                    sc_spheref *sphere);

@@ -12,6 +12,16 @@
  *
  * The library never prints: call sc_simd_init() to learn whether
  * SPHERECULL_ISA was honoured.
+ *
+ * Threads. The kernel table is one process-wide pointer, published
+ * atomically: racing first uses from many threads agree on one choice, and
+ * every kernel may run from any number of threads at once (each public call
+ * reads the table once). SPHERECULL_ISA is read once, at that first use.
+ * sc_isa_force is global too: it is itself free of data races, but a call
+ * running concurrently may finish on the old level, and since AVX2/AVX-512
+ * batch spheres differ from the others in the last bits (FMA), call it
+ * before starting threads (or while none runs a kernel) if results must not
+ * mix. Traced hits are the same on every level.
  */
 #ifndef SPHERECULL_SC_ISA_H
 #define SPHERECULL_SC_ISA_H

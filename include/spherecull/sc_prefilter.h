@@ -27,6 +27,21 @@
  * Empty lanes (r2 < 0) always reject, so partly filled blocks need no count.
  * The scalar definitions here are the specification; sc_reject* dispatch to
  * the best SIMD kernel for this CPU (see sc_simd.h).
+ *
+ * MXCSR modes. The test is conservative with gradual underflow and with
+ * flush-to-zero / denormals-are-zero (FTZ|DAZ) set in the calling thread:
+ * nothing is rejected unless dd = D.D, the allowance (about r2) and
+ * reach = allowance * dd are all >= 2^-100, and above that the absolute
+ * error of a flushed or zeroed subnormal (< 2^-126 per operation) is far
+ * inside the relative margins (docs/numerics.md, "Flush-to-zero and
+ * denormals-are-zero"). A sphere from the builders (r2 >= 2^-122) is read
+ * the same in both modes.
+ *
+ * Threads. Every function here is reentrant and touches only its arguments
+ * (plus the kernel table, chosen once, atomically, see sc_simd.h): any
+ * number of threads may test rays against the same blocks at once.
+ * Writing a block (sc_sphere_block*_init / _set) while another thread reads
+ * it is a data race, as for any plain struct.
  */
 #ifndef SPHERECULL_SC_PREFILTER_H
 #define SPHERECULL_SC_PREFILTER_H
@@ -38,7 +53,8 @@
 extern "C" {
 #endif
 
-/* 32 bytes, laid out like Embree's RTCRay prefix. */
+/* 32 bytes. Not an Embree RTCRay (that has `time` where this has tmax): from
+ * Embree, convert with sc_ray_from_rtc (sc_rtcray.h), never cast. */
 typedef struct sc_ray {
     float org[3];
     float tmin;

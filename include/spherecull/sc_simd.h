@@ -3,6 +3,17 @@
  *
  * ISA selection: sc_isa.h (one choice for every kernel of the library).
  *
+ * Threads. Every batch and mask function may run from any number of
+ * threads at once; the ISA choice is process-wide (sc_isa.h).
+ *
+ * MXCSR modes. The guarantees of the conservative kinds (every vertex inside)
+ * and of the masks hold with gradual underflow and with FTZ|DAZ set in the
+ * calling thread (sc_circumsphere.h, sc_prefilter.h), for every ISA. The
+ * plain kinds (SC_BATCH_CIRCUM, SC_BATCH_MINIMAL) compute in the thread's
+ * mode: with DAZ a subnormal input coordinate is read as 0 and the sphere is
+ * that of the zeroed triangle, where the scalar sc_circumsphere_* /
+ * sc_minimal_sphere_* return SC_ERR_RANGE.
+ *
  * Batch spheres. Triangles come from a vertex buffer + index buffer or from
  * pre-gathered SoA arrays; spheres go to SoA arrays cx, cy, cz, r2 that the
  * caller allocates with room for sc_simd_padded(count) entries (a multiple

@@ -39,6 +39,32 @@
  * Statistics: pass a non-NULL sc_trace_stats to have the counters of this
  * ray ADDED to it (so one struct can sum a whole ray set). With NULL, a
  * separately compiled kernel without any counting runs: no cost.
+ *
+ * Threads. A built sc_bvh is read-only: any number of threads may trace it
+ * at once (sc_trace_closest, sc_trace_any, sc_trace_closest_brute), each with
+ * its own hit record and its own sc_trace_stats (one stats struct shared by
+ * two threads is a data race: the counters are plain adds). Freeing a BVH
+ * while a thread traces it is not allowed. The kernel set is fixed per BVH at
+ * build time (sc_bvh_config.isa), so sc_isa_force (sc_simd.h) does not switch
+ * it; the sphere masks inside go through the global table of sc_simd.h.
+ * tests/test_threads.c runs 4 tracers on one BVH while 2 threads build and
+ * free their own, every ISA, under ThreadSanitizer (scripts/test.sh --tsan).
+ *
+ * MXCSR modes. Every guarantee above (conservative box tests, watertight
+ * and exact triangle tests, the prefilter never rejecting a hit) holds with
+ * gradual underflow and with flush-to-zero / denormals-are-zero set in the
+ * tracing thread: the error bounds use normal-range floors, and a lane the
+ * float filter cannot certify there (e.g. |fl(1/det)| < 2^-126) goes on to
+ * the double and exact stages, which never see a subnormal (products of at
+ * most three floats stay above 2^-1022) or read the floats' bits. The
+ * watertight test's float edge functions flush symmetrically (U(a,b) =
+ * -U(b,a) still holds) and a flushed zero takes the double fallback. With
+ * DAZ, a subnormal ray or vertex coordinate is read as 0 by the float
+ * stages; SC_TRI_EXACT's exact stage still decides for the given bits.
+ * Both modes are tested (tests registered as <name>_ftz). Two corners are
+ * not covered under DAZ (docs/numerics.md): a ray with some |d_k| < 1e-18
+ * whose origin or box coordinate on that axis is subnormal, and a ray whose
+ * largest direction component is below 2^-95 with another one subnormal.
  */
 #ifndef SPHERECULL_SC_TRACE_H
 #define SPHERECULL_SC_TRACE_H

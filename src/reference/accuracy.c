@@ -1,5 +1,8 @@
+#include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "sc_accuracy.h"
 
@@ -51,6 +54,19 @@ void sc_acc_ref_compute(sc_acc_ref *r, const double V[3][3])
     r->condition = sc_ref_condition(V[0], V[1], V[2]);
 }
 
+/* (float)x, also for a float subnormal when the thread flushes subnormal
+ * results to zero (MXCSR FTZ): the kernel must see the caller's input, and
+ * only then run in the thread's mode. x is in float's range. */
+static float float_of(double x)
+{
+    if (!(fabs(x) < FLT_MIN) || x == 0)
+        return (float)x;
+    uint32_t bits = (uint32_t)llrint(fabs(x) * 0x1p149) | (x < 0 ? 0x80000000u : 0);
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
 void sc_acc_eval(const sc_acc_variant *v, int as_float, const double V[3][3],
                  const sc_acc_ref *ref, sc_acc_result *out)
 {
@@ -74,7 +90,7 @@ void sc_acc_eval(const sc_acc_variant *v, int as_float, const double V[3][3],
         float F[3][3];
         for (int k = 0; k < 3; k++)
             for (int i = 0; i < 3; i++)
-                F[k][i] = (float)V[k][i];
+                F[k][i] = float_of(V[k][i]);
         RUN_KERNEL(f, sc_spheref, F[0], F[1], F[2]);
     } else {
         RUN_KERNEL(d, sc_sphered, V[0], V[1], V[2]);

@@ -8,7 +8,7 @@ static const char *const names[SC_FAM_COUNT] = {
     "cap-1e-4", "cap-1e-5", "cap-1e-6", "cap-1e-7",
     "needle-1e-4", "needle-1e-5", "needle-1e-6", "needle-1e-7",
     "far-1e3", "far-1e4", "far-1e5",
-    "scale-1e-20", "scale-1e18",
+    "scale-1e-20", "scale-1e-30", "scale-1e18",
     "right", "duplicate", "collinear", "nonfinite", "subnormal",
 };
 
@@ -117,8 +117,8 @@ void sc_family_triangle(sc_family f, sc_rng *r, int as_float, double V[3][3])
         }
         break;
     }
-    case SC_FAM_SCALE_1EM20: case SC_FAM_SCALE_1E18: {
-        double s = f == SC_FAM_SCALE_1EM20 ? 1e-20 : 1e18;
+    case SC_FAM_SCALE_1EM20: case SC_FAM_SCALE_1EM30: case SC_FAM_SCALE_1E18: {
+        double s = f == SC_FAM_SCALE_1EM20 ? 1e-20 : f == SC_FAM_SCALE_1EM30 ? 1e-30 : 1e18;
         for (int k = 0; k < 3; k++) {
             random_in_cube(r, 1, p);
             for (int i = 0; i < 3; i++)

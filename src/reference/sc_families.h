@@ -13,7 +13,7 @@ typedef enum sc_family {
     SC_FAM_CAP_1E4, SC_FAM_CAP_1E5, SC_FAM_CAP_1E6, SC_FAM_CAP_1E7,        /* apex height h/L */
     SC_FAM_NEEDLE_1E4, SC_FAM_NEEDLE_1E5, SC_FAM_NEEDLE_1E6, SC_FAM_NEEDLE_1E7, /* short edge w/L */
     SC_FAM_FAR_1E3, SC_FAM_FAR_1E4, SC_FAM_FAR_1E5,   /* size 1e-3 at that distance from 0 */
-    SC_FAM_SCALE_1EM20, SC_FAM_SCALE_1E18,            /* random triangle scaled */
+    SC_FAM_SCALE_1EM20, SC_FAM_SCALE_1EM30, SC_FAM_SCALE_1E18, /* random triangle scaled */
     SC_FAM_RIGHT,                                     /* exactly right-angled */
     SC_FAM_DUPLICATE,                                 /* two equal vertices */
     SC_FAM_COLLINEAR,                                 /* exactly collinear */

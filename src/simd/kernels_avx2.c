@@ -73,7 +73,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define VP f32x8
 #define REAL float
 #define REAL_U (FLT_EPSILON / 2)
-#define REAL_TRUE_MIN FLT_TRUE_MIN
+#define REAL_MIN FLT_MIN
 #define FUNC spheres_f_avx2
 #define SOURCE sc_tri_source_f
 #define SOA sc_spheres_soaf
@@ -83,7 +83,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #undef VP
 #undef REAL
 #undef REAL_U
-#undef REAL_TRUE_MIN
+#undef REAL_MIN
 #undef FUNC
 #undef SOURCE
 #undef SOA
@@ -91,7 +91,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define VP f64x4
 #define REAL double
 #define REAL_U (DBL_EPSILON / 2)
-#define REAL_TRUE_MIN DBL_TRUE_MIN
+#define REAL_MIN DBL_MIN
 #define FUNC spheres_d_avx2
 #define SOURCE sc_tri_source_d
 #define SOA sc_spheres_soad

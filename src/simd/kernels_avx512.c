@@ -72,7 +72,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define VP f32x16
 #define REAL float
 #define REAL_U (FLT_EPSILON / 2)
-#define REAL_TRUE_MIN FLT_TRUE_MIN
+#define REAL_MIN FLT_MIN
 #define FUNC spheres_f_avx512
 #define SOURCE sc_tri_source_f
 #define SOA sc_spheres_soaf
@@ -82,7 +82,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #undef VP
 #undef REAL
 #undef REAL_U
-#undef REAL_TRUE_MIN
+#undef REAL_MIN
 #undef FUNC
 #undef SOURCE
 #undef SOA
@@ -90,7 +90,7 @@ static inline ATTR __attribute__((always_inline)) uint32_t load_indexed_rows_avx
 #define VP f64x8
 #define REAL double
 #define REAL_U (DBL_EPSILON / 2)
-#define REAL_TRUE_MIN DBL_TRUE_MIN
+#define REAL_MIN DBL_MIN
 #define FUNC spheres_d_avx512
 #define SOURCE sc_tri_source_d
 #define SOA sc_spheres_soad

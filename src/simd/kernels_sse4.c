@@ -14,7 +14,7 @@
 #define VP f32x4
 #define REAL float
 #define REAL_U (FLT_EPSILON / 2)
-#define REAL_TRUE_MIN FLT_TRUE_MIN
+#define REAL_MIN FLT_MIN
 #define FUNC spheres_f_sse4
 #define SOURCE sc_tri_source_f
 #define SOA sc_spheres_soaf
@@ -22,7 +22,7 @@
 #undef VP
 #undef REAL
 #undef REAL_U
-#undef REAL_TRUE_MIN
+#undef REAL_MIN
 #undef FUNC
 #undef SOURCE
 #undef SOA
@@ -30,7 +30,7 @@
 #define VP f64x2
 #define REAL double
 #define REAL_U (DBL_EPSILON / 2)
-#define REAL_TRUE_MIN DBL_TRUE_MIN
+#define REAL_MIN DBL_MIN
 #define FUNC spheres_d_sse4
 #define SOURCE sc_tri_source_d
 #define SOA sc_spheres_soad

@@ -44,8 +44,10 @@ static inline ATTR uint32_t RCAT(RFUNC, lanes)(RV(t) ox, RV(t) oy, RV(t) oz, RV(
     RV(t) allowance = RV(add)(RV(mul)(r2, RV(set1)(1 + 0x1p-10f)),
                               RV(mul)(RV(set1)(1025 * (8 * (FLT_EPSILON / 2)) * (8 * (FLT_EPSILON / 2))), ococ));
     RV(t) reach = RV(mul)(allowance, dd);
-    /* Below 2^-100 the products may be subnormal: keep (prefilter.c). */
-    RV(m) trusted = RV(and)(RV(ge)(dd, RV(set1)(0x1p-100f)), RV(ge)(reach, RV(set1)(0x1p-100f)));
+    /* Below 2^-100 the products may be subnormal or flushed: keep
+     * (prefilter.c, also for MXCSR FTZ|DAZ). */
+    RV(m) trusted = RV(and)(RV(and)(RV(ge)(dd, RV(set1)(0x1p-100f)), RV(ge)(allowance, RV(set1)(0x1p-100f))),
+                            RV(ge)(reach, RV(set1)(0x1p-100f)));
     RV(m) rej = RV(gt)(cross2, reach);
 
     RV(t) px = RV(mul)(ocx, dx), py = RV(mul)(ocy, dy), pz = RV(mul)(ocz, dz);

@@ -3,7 +3,7 @@
  * Included by kernels_<isa>.c with
  *   VP        vector shape prefix (f32x8, f64x4, ...; see simd_vec.h)
  *   REAL      float | double
- *   REAL_U    unit roundoff;  REAL_TRUE_MIN  smallest subnormal
+ *   REAL_U    unit roundoff;  REAL_MIN  smallest normal number
  *   ATTR      the ISA's target attribute
  *   FUNC      name of the kernel to define (sc_kernels.spheres_f / _d)
  *   SOURCE    sc_tri_source_f | sc_tri_source_d;  SOA  sc_spheres_soaf | _soad
@@ -303,7 +303,7 @@ static inline ATTR void LOCAL(one)(const LOCAL(v3) P[3], VM bad, int method, int
         VT dd = LOCAL(dot3)(d, d);
         worst = vsel(vle(dd, worst), worst, dd);     /* NaN poisons, as specified */
     }
-    r2 = vadd(vmul(worst, vset1(1 + 8 * REAL_U)), vset1(8 * REAL_TRUE_MIN));
+    r2 = vadd(vmul(worst, vset1(1 + 8 * REAL_U)), vset1(16 * REAL_MIN));
     have_c = mand(have_c, mand(vfinite(r2), LOCAL(finite3)(c)));
     *centre = LOCAL(sel3)(have_c, c, (LOCAL(v3)){ zero, zero, zero });
     *radius2 = vsel(have_c, r2, inf);
@@ -385,7 +385,7 @@ static inline ATTR __attribute__((always_inline)) VM LOCAL(fast)(const LOCAL(v3)
         LOCAL(v3) d = LOCAL(sub3)(P[k], c);
         worst = vmax(worst, LOCAL(dot3)(d, d));
     }
-    VT r2 = vadd(vmul(worst, vset1(1 + 8 * REAL_U)), vset1(8 * REAL_TRUE_MIN));
+    VT r2 = vadd(vmul(worst, vset1(1 + 8 * REAL_U)), vset1(16 * REAL_MIN));
     *centre = c;
     *radius2 = r2;
     return mandnot(mand(ok, vle(r2, vset1(FAST_R2_HI))), veq(lo, lo));   /* lanes not ok */

@@ -11,7 +11,7 @@
 #define SUF f
 #define SPHERE sc_spheref
 #define REAL_U (FLT_EPSILON / 2)
-#define REAL_TRUE_MIN FLT_TRUE_MIN
+#define REAL_MIN FLT_MIN
 #define LDEXP ldexpf
 #define ILOGB ilogbf
 #define FABS fabsf
@@ -24,7 +24,7 @@
 #undef SUF
 #undef SPHERE
 #undef REAL_U
-#undef REAL_TRUE_MIN
+#undef REAL_MIN
 #undef LDEXP
 #undef ILOGB
 #undef FABS
@@ -36,7 +36,7 @@
 #define SUF d
 #define SPHERE sc_sphered
 #define REAL_U (DBL_EPSILON / 2)
-#define REAL_TRUE_MIN DBL_TRUE_MIN
+#define REAL_MIN DBL_MIN
 #define LDEXP ldexp
 #define ILOGB ilogb
 #define FABS fabs

@@ -5,7 +5,7 @@
  *   SUF         f | d            (name suffix)
  *   SPHERE      sc_spheref | sc_sphered
  *   REAL_U      unit roundoff (2^-24 | 2^-53)
- *   REAL_TRUE_MIN  smallest positive subnormal
+ *   REAL_MIN       smallest positive normal number
  *   LDEXP, ILOGB, FABS, ISFINITE  the matching libm calls
  *
  * These scalar kernels are the specification the SIMD kernels are tested
@@ -317,10 +317,38 @@ static sc_status FN(minimal_sphere)(const REAL A[3], const REAL B[3], const REAL
 }
 
 /* Public contract: on any error the sphere is (0,0,0) with r2 = +inf. */
+/* 1 when some coordinate is subnormal and the calling thread reads
+ * subnormal operands as zero (MXCSR DAZ): the arithmetic then sees another
+ * triangle than the caller's. Decided on the bits, since under DAZ every
+ * floating-point comparison of a subnormal says "zero". */
+static int FN(subnormal_under_daz)(const REAL *const V[3])
+{
+    int any = 0;
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++) {
+            unsigned char b[sizeof(REAL)];
+            memcpy(b, &V[k][i], sizeof b);
+            /* Little endian: the exponent sits in the top bits. */
+            unsigned hi = (unsigned)b[sizeof b - 1] << 8 | b[sizeof b - 2];
+            unsigned expo = sizeof(REAL) == 4 ? (hi >> 7) & 0xffu : (hi >> 4) & 0x7ffu;
+            int zero = 1;
+            for (size_t j = 0; j + 1 < sizeof b; j++)
+                zero &= b[j] == 0;
+            zero &= sizeof(REAL) == 4 ? (hi & 0x7fu) == 0 : (hi & 0xfu) == 0;
+            any |= expo == 0 && !zero;
+        }
+    if (!any)
+        return 0;
+    volatile REAL tiny = REAL_MIN / 2;
+    return tiny + 0 == 0;
+}
+
 sc_status FN(sc_circumsphere)(const REAL A[3], const REAL B[3], const REAL C[3],
                               sc_method method, sc_origin origin, SPHERE *out)
 {
     sc_status st = FN(circumsphere)(A, B, C, method, origin, out);
+    if (st == SC_OK && FN(subnormal_under_daz)((const REAL *const[3]){ A, B, C }))
+        st = SC_ERR_RANGE;
     if (st != SC_OK && out)
         FN(set_never_reject)(out);
     return st;
@@ -330,6 +358,8 @@ sc_status FN(sc_minimal_sphere)(const REAL A[3], const REAL B[3], const REAL C[3
                                 sc_method method, sc_origin origin, SPHERE *out)
 {
     sc_status st = FN(minimal_sphere)(A, B, C, method, origin, out);
+    if (st == SC_OK && FN(subnormal_under_daz)((const REAL *const[3]){ A, B, C }))
+        st = SC_ERR_RANGE;
     if (st != SC_OK && out)
         FN(set_never_reject)(out);
     return st;
@@ -347,9 +377,15 @@ void FN(sc_sphere_make_conservative)(const REAL A[3], const REAL B[3], const REA
         if (!(dd <= worst))    /* also takes NaN, which then poisons worst */
             worst = dd;
     }
-    /* fl(|V - c|^2) is within (1 +- 5u) of the exact value plus a few
-     * denorm_min of underflow; the margin is a little wider than that. */
-    REAL r2 = worst * (1 + 8 * REAL_U) + 8 * REAL_TRUE_MIN;
+    /* fl(|V - c|^2) is within (1 +- 5u) of the exact value plus an absolute
+     * underflow error. With gradual underflow that error is a few denorm_min;
+     * with flush-to-zero / denormals-are-zero (MXCSR FTZ|DAZ) each difference
+     * may lose a subnormal operand or result (< MIN), each square and the sum
+     * may flush (< MIN each), and worst * (1 + 8u) may flush (< MIN): at most
+     * about 5 MIN in all. The pad 16 MIN is a normal number, so it survives
+     * DAZ where the sphere is read, and r2 >= 16 MIN in both modes
+     * (docs/numerics.md, "Flush-to-zero and denormals-are-zero"). */
+    REAL r2 = worst * (1 + 8 * REAL_U) + 16 * REAL_MIN;
     if (!ISFINITE(r2) || !FN(all_finite)(s->c, 3)) {
         FN(set_never_reject)(s);
         return;

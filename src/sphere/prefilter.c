@@ -22,10 +22,17 @@ int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2)
      * the distance to the sphere while r2 does not (docs/numerics.md). */
     float allowance = r2 * (1 + 0x1p-10f) + 1025 * (8 * U) * (8 * U) * ococ;
     float reach = allowance * dd;                 /* >= (r |D|)^2 */
-    /* With dd or reach below 2^-100 the products behind them may be
-     * subnormal (|D| < 2^-50, or r |D| < 2^-50): their absolute rounding is
-     * no longer covered by the relative margins, so nothing is rejected. */
-    if (!(dd >= 0x1p-100f && reach >= 0x1p-100f))
+    /* With dd, allowance or reach below 2^-100 the products behind them may
+     * be subnormal (|D| < 2^-50, or r |D| < 2^-50): their absolute error is
+     * no longer covered by the relative margins, so nothing is rejected.
+     * Above it, an absolute error of up to 2^-126 per operation — what
+     * gradual underflow (2^-150) and flush-to-zero / denormals-are-zero
+     * (MXCSR FTZ|DAZ: a subnormal result or operand becomes 0) leave — is
+     * below 2^-70 of the terms it touches, far inside the 2^-10 margins.
+     * allowance >= 2^-100 also covers an r2 that DAZ reads as 0 (r2 <
+     * 2^-126): the r2 lost is below 2^-26 of the allowance. The sphere
+     * builders never emit such an r2 (their r2 >= 2^-122, sc_circumsphere.h). */
+    if (!(dd >= 0x1p-100f && allowance >= 0x1p-100f && reach >= 0x1p-100f))
         return 0;
     if (cross2 > reach)
         return 1;

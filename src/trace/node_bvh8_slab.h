@@ -55,7 +55,7 @@ SC_TRACE_INLINE unsigned sc_slab(const sc_ray_pre *p, const sc_bvh_node8 *node, 
  * (lo = +inf, hi = -inf) still give an empty interval. */
 #define SC_SLAB_DOWN (1.0f - 0x1p-21f)
 #define SC_SLAB_UP (1.0f + 0x1p-21f)
-#define SC_SLAB_PAR_EPS 0x1p-140f
+#define SC_SLAB_PAR_EPS 0x1p-122f   /* normal: survives DAZ (16 MIN of underflow) */
 SC_TRACE_INLINE unsigned sc_slab_par(const sc_ray_pre *p, const sc_bvh_node8 *node, float tmin, float tmax,
                                    float *dist)
 {

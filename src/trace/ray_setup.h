@@ -77,8 +77,8 @@ SC_TRACE_INLINE int sc_ray_parallel(const sc_ray *r)
 SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
 {
     float S = (m[0] + m[1]) + m[2];
-    *xK = fmaf(S, SC_EXACT_KS, 0x1p-149f);
-    *xc0 = fmaf(S * S, SC_EXACT_CS, 0x1p-124f);
+    *xK = fmaf(S, SC_EXACT_KS, 0x1p-123f);    /* floors normal: FTZ|DAZ (tri_exact.c) */
+    *xc0 = fmaf(S * S, SC_EXACT_CS, 0x1p-121f);
 }
 
 /* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other
@@ -136,14 +136,22 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
          * m >= M(1 - u) and 5 % slack for the roundings of these few
          * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and
          * then fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny
-         * terms cover underflow of the products and a subnormal rd; the
-         * 2^-148 in g keeps g >= |o| C + m C when it underflows, because
-         * |rd| (up to 1e18) multiplies g's rounding error (found by
-         * tests/test_slab.c on coordinates near 1e-40). */
+         * terms are normal numbers (MIN = 2^-126) so that they hold with
+         * gradual underflow and with MXCSR FTZ|DAZ (subnormal results and
+         * operands read as 0) alike:
+         *  - 2^-123 = 8 MIN in g, multiplied by |rd| (up to 1e18): a plane
+         *    or origin coordinate that DAZ reads as 0 (< MIN each), and g's
+         *    own underflow (< MIN), each shift a distance by < MIN |rd|;
+         *  - m 2^-124: an rd that underflows (|d| > 2^126) is off by < M 2^-126
+         *    in distance, flushed to 0 by FTZ entirely (|tau| <= M 2^-126);
+         *  - 2^-122 = 16 MIN: underflow of o rd, of the pad, of fl(o rd) + E
+         *    and of the slab FMA itself, < MIN each.
+         * (tests/test_slab.c checks it against MPFR in both modes, on
+         * coordinates near 1e-40.) */
         float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
         mk[k] = m;
-        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-148f));
-        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-147f, 0x1p-140f));
+        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
+        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-124f, 0x1p-122f));
         float ord = p->org[k] * p->rd[k];
         p->ord_near[k] = ord + pad;
         p->ord_far[k] = ord - pad;

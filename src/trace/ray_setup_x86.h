@@ -64,9 +64,9 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     const __m128 m = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_lo), o)),
                                 _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_hi), o)));
     const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
-                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-148f)));
+                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-123f)));
     const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
-                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-147f), _mm_set1_ps(0x1p-140f)));
+                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
     const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
 #define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
     c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);

@@ -14,8 +14,8 @@
  *   exact U* = D.(c x b)/|D_kz| by at most
  *     hC eps + hB eps + 2 eps^2 + 2.0001u hB hC + 2^-149
  *     <= (6.0012u S + 2^-149.9)(hB + hC) + 34u^2 S^2 + 2^-149,
- *   so K = 6.1u S + 2^-149 and c0 = 34u^2 S^2 + 2^-124 (1.6% slack for the
- *   two roundings of E = fl(K fl(hB + hC) + c0) and of h).
+ *   so K = 6.1u S + floor and c0 = 34u^2 S^2 + floor (1.6% slack for the
+ *   two roundings of E = fl(K fl(hB + hC) + c0) and of h; floors below).
  *   |U| > E proves sign(U) = sign(U*). With three certain edges of one sign,
  *   t* = sum l_i* z_i* with l_i* = U_i* / sum U_j* >= 0 (convex). With
  *   l_i = U_i / sum U_j: sum |l_i - l_i*| <= 2E/|sum U| (E = sum of the edge
@@ -27,9 +27,25 @@
  *     |t - t*| <= 2.0001 rho R + 14.02u Z + 2.001u|t| + 2^-147.9/|det|.
  *   The kernels use 2.02, 15u, 3u and 2^-146 for slack against the rounding
  *   of the bound itself (q fl(1/|det|) has two roundings: inside the 1%).
+ * Underflow, with gradual underflow or with MXCSR FTZ|DAZ (a subnormal
+ * result or operand becomes 0, an absolute error below MIN = 2^-126 per
+ * operation, where gradual underflow leaves 2^-150): the floors are normal
+ * numbers so DAZ cannot zero them. A coordinate read as 0, the translation,
+ * Sx a_z, Sx itself (|err| < MIN |a_z|, inside the u terms) and the shear
+ * subtraction add below 4 MIN (1 + |a_z|) to |Px - Px*|; the two products
+ * and the difference of U below 3 MIN: K's floor 2^-123 = 8 MIN and c0's
+ * 2^-121 = 32 MIN cover them, and E >= c0 keeps a certified U, and det,
+ * normal. T's three products and two sums add below 5 MIN, times |1/det|:
+ * SC_EXACT_FLOOR_N = 2^-123; z_i = Sz a_kz and T fl(1/det) below MIN each in t:
+ * SC_EXACT_FLOOR_T = 2^-120. fl(1/det) itself is only u-accurate while normal:
+ * a lane with |fl(1/det)| < 2^-126 (|det| > 2^126; FTZ makes it 0) is left
+ * undecided and settled below.
  * The double filter below has the same structure with u = 2^-53 and no
- * underflow (products of at most three float-derived values stay far above
- * 2^-1022), and the exact path has no rounding at all.
+ * underflow in either mode (products of at most three float-derived values
+ * stay far above 2^-1022, so nothing is subnormal for DAZ or FTZ to zero),
+ * and the exact path has no floating point at all (it reads the floats'
+ * bits, so it decides for the caller's values even where DAZ reads a
+ * subnormal coordinate as 0).
  */
 #include <math.h>
 #include <string.h>

@@ -61,7 +61,7 @@ typedef struct sc_exact_hit {
  * then at most 3 E1, and SC_EXACT_K606 = 3 SC_EXACT_K202. Looser by at most 2x, which
  * only sends a few more lanes to sc_exact_resolve; six operations fewer per leaf. */
 #define SC_EXACT_K606 (6.06f)
-#define SC_EXACT_FLOOR_N (0x1p-146f)
+#define SC_EXACT_FLOOR_N (0x1p-123f)   /* normal: holds under MXCSR FTZ|DAZ (tri_exact.c) */
 #define SC_EXACT_K15U (15.0f * 0x1p-24f)
 #define SC_EXACT_K3U (3.0f * 0x1p-24f)
 #define SC_EXACT_FLOOR_T (0x1p-120f)
@@ -147,7 +147,7 @@ SC_TRACE_INLINE int sc_tri_exact_filter(const sc_ray_pre *p, const float *rows, 
     float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
     float q = fmaf(R, E1 * SC_EXACT_K606, SC_EXACT_FLOOR_N);
     float e = fmaf(q, fabsf(inv), fmaf(Z, SC_EXACT_K15U, fmaf(fabsf(tt), SC_EXACT_K3U, SC_EXACT_FLOOR_T)));
-    if (!(e < INFINITY))
+    if (!(e < INFINITY) || !(fabsf(inv) >= 0x1p-126f))   /* 1/det subnormal or flushed: undecided */
         return 1;
     if (tt - e > tmax || tt + e < tmin)
         return 0;

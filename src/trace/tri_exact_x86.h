@@ -63,7 +63,8 @@ tri_exact8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, unsign
                                    _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_EXACT_K15U),
                                                    _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_EXACT_K3U),
                                                                    _mm256_set1_ps(SC_EXACT_FLOOR_T))));
-        unsigned fin = mask8(_mm256_cmp_ps(e, _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+        unsigned fin = mask8(_mm256_and_ps(_mm256_cmp_ps(e, _mm256_set1_ps(INFINITY), _CMP_LT_OQ),
+                                           _mm256_cmp_ps(ABS(inv), _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ)));
         unsigned out = mask8(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(tt, e), _mm256_set1_ps(tmax), _CMP_GT_OQ),
                                                _mm256_cmp_ps(_mm256_add_ps(tt, e), _mm256_set1_ps(tmin), _CMP_LT_OQ)));
         open |= in & ~fin;
