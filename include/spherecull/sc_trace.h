@@ -44,11 +44,12 @@
  * at once (sc_trace_closest, sc_trace_any, sc_trace_closest_brute), each with
  * its own hit record and its own sc_trace_stats (one stats struct shared by
  * two threads is a data race: the counters are plain adds). Freeing a BVH
- * while a thread traces it is not allowed. The kernel set is fixed per BVH at
- * build time (sc_bvh_config.isa), so sc_isa_force (sc_simd.h) does not switch
- * it; the sphere masks inside go through the global table of sc_simd.h.
+ * while a thread traces it is not allowed. Each call reads the process-wide
+ * ISA level once (sc_isa.h); sc_isa_force may run concurrently, and since
+ * every level returns the same hits, a call never sees a mixed answer.
  * tests/test_threads.c runs 4 tracers on one BVH while 2 threads build and
- * free their own, every ISA, under ThreadSanitizer (scripts/test.sh --tsan).
+ * free their own, every ISA, and once more while another thread switches
+ * the ISA level, under ThreadSanitizer (scripts/test.sh --tsan).
  *
  * MXCSR modes. Every guarantee above (conservative box tests, watertight
  * and exact triangle tests, the prefilter never rejecting a hit) holds with
