@@ -99,10 +99,9 @@ SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, i
     *kx_out = kx, *ky_out = ky, *kz_out = kz;
 }
 
-/* Only what the watertight and Moller lane tests read (origin, direction,
- * shear): for callers that test triangles without a BVH (the Embree
- * user-geometry back end). Sz = 1/d[kz] is the value sc_ray_precompute
- * computes, so the lane tests give the same bits either way. */
+/* What the watertight and Moller lane tests read (origin, direction, range,
+ * shear); on its own for callers that test triangles without a BVH (the
+ * Embree user-geometry back end), and the first step of sc_ray_precompute. */
 SC_TRACE_INLINE void sc_ray_precompute_shear(const sc_ray *r, sc_ray_pre *p)
 {
     for (int k = 0; k < 3; k++)
@@ -123,11 +122,10 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
                                      const float root_hi[3])
 {
     float mk[3];
+    sc_ray_precompute_shear(r, p);
     p->parallel = sc_ray_parallel(r);
     for (int k = 0; k < 3; k++) {
         p->rdp[k] = p->parallel ? 1.0f / r->dir[k] : 0.0f;
-        p->org[k] = r->org[k];
-        p->dir[k] = r->dir[k];
         float d = r->dir[k];
         if (fabsf(d) < SC_MIN_RCP_INPUT)
             d = copysignf(SC_MIN_RCP_INPUT, d);
@@ -160,16 +158,6 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
         p->far_row[k] = 2 * k + 1 - neg;
     }
     sc_exact_consts(mk, &p->xK, &p->xc0);
-    p->tmin = r->tmin;
-    p->tmax = r->tmax;
-    const float *d = r->dir;
-    int kx, ky, kz;
-    sc_shear_axes(d, &kx, &ky, &kz);
-    p->kx = kx, p->ky = ky, p->kz = kz;
-    p->Sx = d[kx] / d[kz];
-    p->Sy = d[ky] / d[kz];
-    /* 1/d[kz] is rd[kz] unless that was clamped: one divide fewer */
-    p->Sz = fabsf(d[kz]) >= SC_MIN_RCP_INPUT ? p->rd[kz] : 1.0f / d[kz];
 }
 
 #endif
