@@ -1,5 +1,5 @@
 #!/bin/sh
-# Bad input at the command line (issue 7): every case must exit non-zero
+# Bad input at the command line: every case must exit non-zero
 # with exactly one line on stderr ("spherecull: ..."), and leave the output
 # directory as it was: no new file (no partial output, no temporary), no
 # changed file.
@@ -127,6 +127,19 @@ ok "bench --csv symlink to device" bench proc:sphere:200 $SMALL_B --csv "$root/f
 ok "accuracy --csv missing dir"  accuracy --n 5 --csv /nonexistent/x.csv
 ok "accuracy --csv read-only dir" accuracy --n 5 --csv $ro/x.csv
 ok "accuracy --csv symlink to device" accuracy --n 5 --csv "$root/full"
+# A full disk, as a file size limit of 512 bytes (writes fail with EFBIG,
+# SIGXFSZ ignored): the write fails at its end, after the rendering; the old
+# existing.png must stay and no temporary may be left.
+cat > "$root/limited.sh" <<EOS
+#!/bin/sh
+ulimit -f 1
+trap '' XFSZ
+exec "$S" "\$@"
+EOS
+chmod +x "$root/limited.sh"
+S_real=$S S=$root/limited.sh
+ok "render -o over a file on a full disk" render proc:sphere:2000 -o existing.png --width 256 --height 256
+S=$S_real
 
 # ---- absurd numbers
 for v in 0 1e9 -5 abc 1.5 99999999999999999999 ""; do

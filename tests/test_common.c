@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <dirent.h>
 #include <cmocka.h>
@@ -154,6 +156,44 @@ static void test_atomic_write(void **state)
     rmdir(dir);
 }
 
+/* Stops the process with SIGTERM in the middle of the write. */
+static int write_then_terminate(void *ctx, FILE *f)
+{
+    fputs(ctx, f);
+    fflush(f);
+    raise(SIGTERM);
+    return 0;
+}
+
+static void test_atomic_write_killed(void **state)
+{
+    (void)state;
+    memcpy(dir + strlen(dir) - 6, "XXXXXX", 6);
+    assert_non_null(mkdtemp(dir));
+    char path[128];
+    snprintf(path, sizeof path, "%s/out.png", dir);
+    struct sigaction before, after;
+    assert_int_equal(sigaction(SIGTERM, NULL, &before), 0);
+    assert_int_equal(sc_write_atomic(path, write_text, "old\n"), 0);
+    /* the caller's handlers are put back once the write is over */
+    assert_int_equal(sigaction(SIGTERM, NULL, &after), 0);
+    assert_true(after.sa_handler == before.sa_handler);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        sc_write_atomic(path, write_then_terminate, "half of the new");
+        _exit(0);      /* not reached: SIGTERM ends the child */
+    }
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFSIGNALED(status));
+    assert_int_equal(WTERMSIG(status), SIGTERM);
+    assert_string_equal(slurp(path), "old\n");
+    assert_int_equal(others("out.png"), 0);           /* the temporary is gone */
+    unlink(path);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -161,6 +201,7 @@ int main(void)
         cmocka_unit_test(test_names),
         cmocka_unit_test(test_clock),
         cmocka_unit_test(test_atomic_write),
+        cmocka_unit_test(test_atomic_write_killed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,5 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -14,6 +15,44 @@ static mode_t default_file_mode(void)
     mode_t mask = umask(0);
     umask(mask);
     return 0666 & ~mask;
+}
+
+/* While a temporary file exists, SIGINT, SIGTERM and SIGHUP remove it and
+ * then end the process as the signal would have: a run stopped while
+ * writing leaves the old file and nothing else. Only async-signal-safe
+ * calls in the handler; the path is set before the handlers go in. */
+static const int cleanup_signals[3] = { SIGINT, SIGTERM, SIGHUP };
+static const char *volatile pending_tmp;
+
+static void remove_tmp_and_die(int sig)
+{
+    const char *tmp = pending_tmp;
+    if (tmp)
+        unlink(tmp);
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static void guard_tmp(const char *tmp, struct sigaction old[3])
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = remove_tmp_and_die;
+    sigemptyset(&sa.sa_mask);
+    pending_tmp = tmp;
+    for (int i = 0; i < 3; i++) {
+        sigaction(cleanup_signals[i], NULL, &old[i]);
+        /* a signal the caller ignores stays ignored */
+        if (old[i].sa_handler != SIG_IGN)
+            sigaction(cleanup_signals[i], &sa, NULL);
+    }
+}
+
+static void unguard_tmp(const struct sigaction old[3])
+{
+    for (int i = 0; i < 3; i++)
+        sigaction(cleanup_signals[i], &old[i], NULL);
+    pending_tmp = NULL;
 }
 
 int sc_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void *ctx)
@@ -32,9 +71,14 @@ int sc_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void 
     if (!tmp)
         return -1;
     snprintf(tmp, len + 16, "%s.tmpXXXXXX", path);
+    struct sigaction old[3];
+    guard_tmp(tmp, old);
     int fd = mkstemp(tmp);
     if (fd < 0) {
+        int saved = errno;
+        unguard_tmp(old);
         free(tmp);
+        errno = saved;
         return -1;
     }
     int ok = fchmod(fd, default_file_mode()) == 0;
@@ -64,6 +108,9 @@ int sc_write_atomic(const char *path, int (*write_fn)(void *ctx, FILE *f), void 
         unlink(tmp);
         errno = saved;
     }
+    int saved = errno;
+    unguard_tmp(old);
+    errno = saved;
     free(tmp);
     return ok ? 0 : -1;
 }

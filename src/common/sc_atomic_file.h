@@ -1,7 +1,10 @@
 /* Every output file of the tools is written through here: into a temporary
  * file in the target's directory, flushed to disk (fsync), then renamed over
  * the target. A failed or interrupted run leaves the old file (or none) and
- * no temporary; readers never see half a file. The new file gets the mode
+ * no temporary; readers never see half a file. While the temporary exists,
+ * SIGINT, SIGTERM and SIGHUP delete it before ending the process (the
+ * caller's handlers are put back afterwards; ignored signals stay ignored).
+ * Not for use from several threads at once (the tools write from one). The new file gets the mode
  * fopen would give it (0666 minus the umask), not mkstemp's 0600. */
 #ifndef SPHERECULL_COMMON_SC_ATOMIC_FILE_H
 #define SPHERECULL_COMMON_SC_ATOMIC_FILE_H
