@@ -1,4 +1,4 @@
-# The OSMesa raster reference (issue 6), once per depth-buffer mode.
+# The OSMesa raster reference, once per depth-buffer mode.
 if(TARGET spherecull_raster)
   sc_add_test(test_raster SOURCES test_raster.c LIBS spherecull_raster ARGS float)
   sc_add_test(test_raster SOURCES test_raster.c LIBS spherecull_raster ARGS fixed24)

@@ -1,4 +1,4 @@
-# SIMD kernels and the exact ray-triangle oracle (issue 3).
+# SIMD kernels and the exact ray-triangle oracle.
 sc_add_test(test_ref_ray SOURCES test_ref_ray.c)
 
 # The kernel tests once per ISA level; a level this CPU lacks exits 77 and

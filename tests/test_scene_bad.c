@@ -1,4 +1,4 @@
-/* Bad input (issue 7): every case must come back as a status and one line
+/* Bad input: every case must come back as a status and one line
  * of text, never a crash, a hang or a half-built scene. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>

@@ -1,4 +1,4 @@
-# Scene and prefilter fuzz targets (issue 7); corpora in corpus/<name without fuzz_>.
+# Scene and prefilter fuzz targets; corpora in corpus/<name without fuzz_>.
 if(TARGET spherecull_scene)
   sc_add_fuzzer(fuzz_scene_json fuzz_scene_json.c)
   target_link_libraries(fuzz_scene_json PRIVATE spherecull_scene)
