@@ -264,10 +264,8 @@ sc_status sc_tracer_run_threads(const sc_tracer *t, const sc_ray *rays, size_t n
 
 int sc_same_hit(const sc_hitrec *a, const sc_hitrec *b, float rel)
 {
-    if (a->prim == b->prim)
-        return a->prim == SC_HITREC_MISS || fabsf(a->t - b->t) <= rel * fabsf(b->t);
     if (a->prim == SC_HITREC_MISS || b->prim == SC_HITREC_MISS)
-        return 0;
+        return a->prim == b->prim;
     return fabsf(a->t - b->t) <= rel * fabsf(b->t);
 }
 

@@ -4,6 +4,7 @@
 #include "bvh/bvh_internal.h"
 #include "node_bvh8_slab.h"
 #include "ray_setup.h"
+#include "simd/sphere_kernels.h"
 #include "tri_exact.h"
 #include "tri_moller.h"
 #include "traverse_stack.h"
@@ -33,16 +34,15 @@ static inline unsigned node_test_par(const trace_ctx *c, const sc_bvh_node8 *nod
     return sc_slab_par(&c->pre, node, tmin, tmax, dist);
 }
 
-/* The scalar specification of the reject kernels (src/sphere/prefilter.c),
- * lane by lane; block = cx[W], cy[W], cz[W], r2[W]. */
+/* The sphere kernels of the scalar level (the specification, lane by lane). */
 static inline uint32_t sphere_reject(const sc_ray *ray, const float *blk, unsigned W)
 {
-    uint32_t mask = 0;
-    for (unsigned i = 0; i < W; i++) {
-        const float c[3] = { blk[i], blk[W + i], blk[2 * W + i] };
-        mask |= (uint32_t)sc_ray_sphere_reject(ray, c, blk[3 * W + i]) << i;
-    }
-    return mask;
+    const sc_sphere_kernels *k = &sc_sphere_kernels_scalar;
+    if (W == 4)
+        return k->reject4(ray, (const sc_sphere_block4 *)(const void *)blk);
+    if (W == 8)
+        return k->reject8(ray, (const sc_sphere_block8 *)(const void *)blk);
+    return k->reject16(ray, (const sc_sphere_block16 *)(const void *)blk);
 }
 
 static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live,
