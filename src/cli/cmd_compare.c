@@ -158,13 +158,10 @@ static int compare_scene(const char *spec, const sc_cmp_options *opt, sc_cmp_row
     if (sc_cli_load_mesh(CMD, spec, &scene, &v, &mesh) != 0)
         return 1;
     char err[512] = "";
-    float lo[3], hi[3], light[3];
-    sc_mesh_bounds(&mesh, lo, hi);
-    sc_light_point(v.lights, v.num_lights, lo, hi, light);
     const char *base = strrchr(spec, '/');
     base = base ? base + 1 : spec;
     fprintf(stderr, "%s: %zu triangles\n", base, v.num_triangles);
-    sc_status st = sc_cmp_scene(base, &mesh, &v.camera, light, opt, rows, stderr, err, sizeof err);
+    sc_status st = sc_cmp_scene(base, &mesh, &v.camera, v.lights, v.num_lights, opt, rows, stderr, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {
         sc_cli_error(CMD, "%s", err[0] ? err : sc_strerror(st));

@@ -353,12 +353,12 @@ static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
 }
 
 sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
-                       const float light[3], const sc_cmp_options *opt, sc_cmp_rows *out, FILE *log,
-                       char *err, size_t errlen)
+                       const sc_light *lights, size_t nlights, const sc_cmp_options *opt, sc_cmp_rows *out,
+                       FILE *log, char *err, size_t errlen)
 {
     if (err && errlen)
         err[0] = 0;
-    if (!scene_name || !camera || !light || !opt || !out || opt->nthreads < 1 ||
+    if (!scene_name || !camera || (nlights && !lights) || !opt || !out || opt->nthreads < 1 ||
         opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1)
         return SC_ERR_INVALID_ARGUMENT;
     for (int k = 0; k < opt->nthreads; k++)
@@ -373,6 +373,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         return st;
     }
     sc_mesh_is_closed(&r.mesh, &r.closed);
+    float light[3];
+    sc_light_point(lights, nlights, r.mesh.lo, r.mesh.hi, light);
     size_t first_row = out->count;
     if ((st = build_tracers(&r)) == SC_OK && (st = make_rays(&r, camera, light)) == SC_OK)
         for (int k = 0; k < SC_RAYS_KIND_COUNT && st == SC_OK; k++)

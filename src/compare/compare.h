@@ -11,6 +11,7 @@
 
 #include "spherecull/sc_camera.h"
 #include "spherecull/sc_rays.h"
+#include "spherecull/sc_scene.h"
 
 enum { SC_CMP_MAX_THREADS = 8, SC_CMP_MAX_TRACERS = 32 };
 
@@ -57,12 +58,12 @@ typedef struct sc_cmp_rows {
 
 void sc_cmp_rows_free(sc_cmp_rows *r);
 
-/* Runs everything for one scene and appends rows. light: point light for
- * shadow rays. log (may be NULL) gets progress lines. On error err holds one
- * line. */
+/* Runs everything for one scene and appends rows. The shadow rays go to
+ * sc_light_point of the scene's lights (tracer.h). log (may be NULL) gets
+ * progress lines. On error err holds one line. */
 sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
-                       const float light[3], const sc_cmp_options *opt, sc_cmp_rows *out, FILE *log,
-                       char *err, size_t errlen);
+                       const sc_light *lights, size_t nlights, const sc_cmp_options *opt, sc_cmp_rows *out,
+                       FILE *log, char *err, size_t errlen);
 
 /* Output helpers (0 on success). */
 int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f);
