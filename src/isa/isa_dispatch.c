@@ -34,8 +34,9 @@ static const sc_kernels kernels_avx2 = { SC_ISA_AVX2, &sc_sphere_kernels_avx2, s
 static const sc_kernels kernels_avx512 = { SC_ISA_AVX512, &sc_sphere_kernels_avx512, sc_trace_kernels_avx512 };
 
 /* What each level's kernels are compiled for (their target attributes). */
-#define NEED_SSE4 (SC_X86_SSE41 | SC_X86_POPCNT)
-#define NEED_AVX2 (NEED_SSE4 | SC_X86_AVX | SC_X86_AVX2 | SC_X86_FMA | SC_X86_BMI1 | SC_X86_BMI2 | SC_X86_LZCNT)
+#define NEED_SSE4 SC_X86_SSE41
+#define NEED_AVX2 (NEED_SSE4 | SC_X86_POPCNT | SC_X86_AVX | SC_X86_AVX2 | SC_X86_FMA | SC_X86_BMI1 | SC_X86_BMI2 | \
+                   SC_X86_LZCNT)
 #define NEED_AVX512 (NEED_AVX2 | SC_X86_AVX512F | SC_X86_AVX512VL | SC_X86_AVX512DQ | SC_X86_AVX512BW)
 #endif
 
