@@ -16,3 +16,8 @@ endif()
 # builds only this under ThreadSanitizer and runs it.
 find_package(Threads REQUIRED)
 sc_add_test(test_threads SOURCES test_threads.c LIBS Threads::Threads FTZ LABELS tsan)
+
+# Packets return the single-ray hits bit for bit (every ISA, prefilter mode,
+# leaf size; camera, edge-aimed, far, wide, shadow and mixed packets).
+sc_add_test(test_packets SOURCES test_packets.c
+            ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes FTZ)

@@ -112,6 +112,9 @@ sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_
  * last group partly valid), marked coherent. width is 8 or 16. */
 sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
                                       sc_hitrec *hits, sc_embree_counters *counters);
+/* rtcOccluded8 / rtcOccluded16 likewise. */
+sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
+                                     sc_embree_counters *counters);
 
 #ifdef __cplusplus
 }

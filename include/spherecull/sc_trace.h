@@ -76,6 +76,7 @@
 #include "sc_isa.h"
 #include "sc_prefilter.h"
 #include "sc_rays.h"
+#include "sc_simd.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -107,6 +108,74 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded,
  * (With SC_TRI_EXACT the decisions are the same as sc_trace_closest's; of
  * exact ties another triangle may be reported.) */
 sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
+
+/* ---- packets ---------------------------------------------------------------
+ *
+ *   sc_ray_packet16 rays;      // SoA, 64-byte aligned (sc_simd.h): lane i is a ray
+ *   sc_hit_packet16 hits;      // 64-byte aligned
+ *   int32_t valid[16];         // non-zero: trace lane i (like rtcIntersect16)
+ *   sc_trace_closest16(bvh, valid, &rays, &hits, NULL);
+ *   int32_t occluded[16];
+ *   sc_trace_any16(bvh, valid, &rays, occluded, NULL);   // 1 or 0 per valid lane
+ *
+ * Lane i of the result is bit for bit what sc_trace_closest / sc_trace_any
+ * returns for ray i (t, u, v, prim; of hits at equal t the smaller prim),
+ * whatever the other lanes hold, on every ISA level; invalid lanes are
+ * neither read nor written. The rays of a packet need not be coherent, but
+ * they pay only when they are (camera rays of a pixel tile, shadow rays of
+ * it to one light): the lanes walk the tree together, each triangle is
+ * tested against all rays of the packet in one vector pass, and when the
+ * rays share their origin the leaf's circumspheres cull triangles for the
+ * whole packet (a sphere outside the packet's bounding cone). Packet kernels
+ * exist for SC_TRI_WATERTIGHT; with the other tests (and on the scalar and
+ * SSE4.1 levels) the lanes are traced one by one. 16-ray packets on the
+ * AVX2 level run as two 8-ray packets.
+ *
+ * Errors (nothing written): INVALID_ARGUMENT for NULL pointers, a packet
+ * or hit not aligned to its size's alignment (32 bytes for 8 lanes, 64 for
+ * 16), or a valid lane whose ray sc_trace_closest would refuse.
+ * Statistics: nodes and leaves count the packet's visits; rays, sphere and
+ * triangle counters count per ray, as for single rays (a triangle tested
+ * against 16 active lanes is 16 tests, a sphere culled for them 16 rejects).
+ * Threads: as the single-ray calls. */
+typedef struct __attribute__((aligned(32))) sc_hit_packet8 {
+    float t[8], u[8], v[8];
+    uint32_t prim[8];
+} sc_hit_packet8;
+typedef struct __attribute__((aligned(64))) sc_hit_packet16 {
+    float t[16], u[16], v[16];
+    uint32_t prim[16];
+} sc_hit_packet16;
+
+sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                            sc_hit_packet8 *hits, sc_trace_stats *stats);
+sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                             sc_hit_packet16 *hits, sc_trace_stats *stats);
+sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                        int32_t occluded[8], sc_trace_stats *stats);
+sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                         int32_t occluded[16], sc_trace_stats *stats);
+
+/* ---- streams ---------------------------------------------------------------
+ *
+ *   sc_trace_closest_n(bvh, rays, sizeof(sc_ray), hits, sizeof(sc_hitrec), n, 0, NULL);
+ *
+ * n rays at byte stride ray_stride (>= sizeof(sc_ray)), results at
+ * hit_stride (>= sizeof(sc_hitrec); for any: occluded_stride >= 4, an
+ * int32_t 1/0 per ray), like rtcIntersect1M / rtcOccluded1M. Each run of 16
+ * consecutive rays whose directions lie within about 11 degrees goes as a
+ * packet, other runs go ray by ray: order the rays so that neighbours are
+ * coherent (pixel tiles) to gain. Results are those of the single-ray calls,
+ * bit for bit. flags: 0, or SC_TRACE_INCOHERENT to skip the packet check
+ * (diffuse bounces, random rays). A ray sc_trace_closest would refuse gets
+ * no result and makes the call return INVALID_ARGUMENT after tracing the
+ * others. */
+#define SC_TRACE_INCOHERENT 1u
+
+sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
+                             size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *stats);
+sc_status sc_trace_any_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
+                         size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *stats);
 
 #ifdef __cplusplus
 }

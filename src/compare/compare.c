@@ -324,8 +324,6 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
     int shadow = k == SC_RAYS_SHADOW;
     for (int ti = 0; ti < r->ntr && st == SC_OK; ti++) {
         const sc_tracer *t = &r->tr[ti];
-        if (shadow && t->def.packet)
-            continue;                      /* packets here are closest-hit only */
         sc_tracer_counters ctr;
         memset(&ctr, 0, sizeof ctr);
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
@@ -342,14 +340,20 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
     return st;
 }
 
-/* Speed against native Embree (rtcIntersect1 / rtcOccluded1), same set and threads. */
+/* Speed against native Embree of the same width, same set and threads:
+ * single rays and streams against rtcIntersect1 / rtcOccluded1 ("embree"),
+ * packets of 8 and 16 against "embree-p8" and "embree-p16". */
 static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
 {
-    for (size_t i = first_row; i < out->count; i++)
+    for (size_t i = first_row; i < out->count; i++) {
+        const sc_tracer_def *d = sc_tracer_find(out->rows[i].tracer);
+        const int w = d && (d->packet == 8 || d->packet == 16) ? d->packet : 0;
+        const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : "embree";
         for (size_t j = first_row; j < out->count; j++)
-            if (strcmp(out->rows[j].tracer, "embree") == 0 && out->rows[j].rays == out->rows[i].rays &&
+            if (strcmp(out->rows[j].tracer, ref) == 0 && out->rows[j].rays == out->rows[i].rays &&
                 out->rows[j].threads == out->rows[i].threads)
                 out->rows[i].speed_vs_embree = out->rows[i].mrays_per_s / out->rows[j].mrays_per_s;
+    }
 }
 
 sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,

@@ -19,6 +19,11 @@ static const sc_tracer_def all_tracers[] = {
     { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0 },
     { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0 },
     { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0 },
+    { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8 },
+    { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16 },
+    { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16 },
+    { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16 },
+    { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM },
 #ifdef SC_HAVE_EMBREE
     { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
     { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
@@ -86,7 +91,13 @@ sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_check
         sc_bvh_config_default(&cfg);
         cfg.prefilter = (sc_prefilter_mode)def->mode;
         cfg.tri_test = (sc_tri_test)def->quality;
-        return sc_tracer_build_bvh(t, def->name, &cfg, cm);
+        sc_status st = sc_tracer_build_bvh(t, def->name, &cfg, cm);
+        t->def.packet = def->packet;
+        /* packets test spheres only for one-origin packets (the cone): the
+         * false positives of a sphere pass are not counted there */
+        if (def->packet)
+            t->fp_exact = 0;
+        return st;
     }
     memset(t, 0, sizeof *t);
     t->def = *def;
@@ -139,6 +150,53 @@ void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c)
     to->tri_tests += c->tri_tests, to->tri_hits += c->tri_hits, to->false_positives += c->false_positives;
 }
 
+/* Rays [base, base + W) as a packet (the tail padded with invalid lanes). */
+static void fill_packet(const sc_ray *rays, size_t n, size_t base, unsigned W, float *soa, int32_t *valid)
+{
+    for (unsigned i = 0; i < W; i++) {
+        size_t k = base + i;
+        const sc_ray *r = &rays[k < n ? k : n - 1];
+        valid[i] = k < n;
+        soa[0 * W + i] = r->org[0], soa[1 * W + i] = r->org[1], soa[2 * W + i] = r->org[2];
+        soa[3 * W + i] = r->tmin;
+        soa[4 * W + i] = r->dir[0], soa[5 * W + i] = r->dir[1], soa[6 * W + i] = r->dir[2];
+        soa[7 * W + i] = r->tmax;
+    }
+}
+
+static sc_status ours_packets(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
+                              sc_trace_stats *tsp)
+{
+    const unsigned W = (unsigned)t->def.packet;
+    sc_ray_packet16 p __attribute__((aligned(64)));
+    sc_hit_packet16 h __attribute__((aligned(64)));
+    int32_t valid[16], o[16];
+    for (size_t base = 0; base < n; base += W) {
+        fill_packet(rays, n, base, W, p.ox, valid);
+        sc_status st;
+        if (W == 16)
+            st = occ ? sc_trace_any16(t->handle, valid, &p, o, tsp) : sc_trace_closest16(t->handle, valid, &p, &h, tsp);
+        else
+            st = occ ? sc_trace_any8(t->handle, valid, (const sc_ray_packet8 *)(const void *)&p, o, tsp)
+                     : sc_trace_closest8(t->handle, valid, (const sc_ray_packet8 *)(const void *)&p,
+                                         (sc_hit_packet8 *)(void *)&h, tsp);
+        if (st != SC_OK)
+            return st;
+        for (unsigned i = 0; i < W && base + i < n; i++) {
+            if (occ) {
+                occ[base + i] = (uint8_t)o[i];
+                continue;
+            }
+            /* an 8-wide hit packet has the same rows at stride 8 */
+            sc_hitrec *hr = &hits[base + i];
+            const float *hf = h.t;
+            hr->t = hf[0 * W + i], hr->u = hf[1 * W + i], hr->v = hf[2 * W + i];
+            hr->prim = ((const uint32_t *)(const void *)hf)[3 * W + i];
+        }
+    }
+    return SC_OK;
+}
+
 static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits, uint8_t *occ,
                           sc_tracer_counters *ctr)
 {
@@ -146,6 +204,29 @@ static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_h
     if (ctr) {
         memset(&ts, 0, sizeof ts);
         tsp = &ts;
+    }
+    if (t->def.packet == SC_TRACER_STREAM || t->def.packet == 8 || t->def.packet == 16) {
+        sc_status st;
+        if (t->def.packet != SC_TRACER_STREAM) {
+            st = ours_packets(t, rays, n, hits, occ, tsp);
+        } else if (occ) {
+            st = SC_OK;
+            int32_t o[256];
+            for (size_t b = 0; b < n && st == SC_OK; b += 256) {
+                size_t k = n - b < 256 ? n - b : 256;
+                st = sc_trace_any_n(t->handle, rays + b, sizeof(sc_ray), o, sizeof(int32_t), k, 0, tsp);
+                for (size_t i = 0; i < k; i++)
+                    occ[b + i] = (uint8_t)o[i];
+            }
+        } else {
+            st = sc_trace_closest_n(t->handle, rays, sizeof(sc_ray), hits, sizeof(sc_hitrec), n, 0, tsp);
+        }
+        if (st == SC_OK && ctr) {
+            sc_tracer_counters c = { n, ts.nodes, ts.leaves, ts.sphere_tests, ts.sphere_rejects, ts.tri_tests,
+                                     ts.tri_hits, 0 };
+            sc_tracer_counters_add(ctr, &c);
+        }
+        return st;
     }
     for (size_t i = 0; i < n; i++) {
         sc_status st;
@@ -179,7 +260,9 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
         ecp = &ec;
     }
     sc_status st;
-    if (occ)
+    if (occ && t->def.packet)
+        st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, ecp);
+    else if (occ)
         st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);
     else if (t->def.packet)
         st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, ecp);

@@ -15,6 +15,7 @@
 #include "spherecull/sc_scene.h"
 
 enum { SC_TRACER_MAX_THREADS = 256 };
+enum { SC_TRACER_STREAM = 1 };   /* sc_tracer_def.packet: our stream calls */
 
 typedef enum sc_tracer_family { SC_TRACER_OURS, SC_TRACER_EMBREE } sc_tracer_family;
 
@@ -25,7 +26,7 @@ typedef struct sc_tracer_def {
     int mode;          /* sc_prefilter_mode (ours) or sc_embree_mode */
     int quality;       /* sc_tri_test (ours) or sc_embree_quality */
     int cluster;       /* Embree user modes: triangles per cluster; 0 = default */
-    int packet;        /* Embree: 0 (single rays), 8 or 16 */
+    int packet;        /* 0 (single rays), 8 or 16; ours also SC_TRACER_STREAM */
 } sc_tracer_def;
 
 /* Work counted inside a tracer; Embree counts only in its user modes. */

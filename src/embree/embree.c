@@ -570,3 +570,38 @@ sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *ray
         ctr->rays += n;
     return SC_OK;
 }
+
+#define OCCLUDED_LOOP(W)                                                                 \
+    for (size_t base = 0; base < n; base += W) {                                        \
+        struct RTCRay##W r __attribute__((aligned(64)));                                \
+        int valid[W] __attribute__((aligned(64)));                                      \
+        for (int i = 0; i < W; i++) {                                                    \
+            size_t k = base + (size_t)i;                                                 \
+            const sc_ray *s = &rays[k < n ? k : n - 1];                                  \
+            valid[i] = k < n ? -1 : 0;                                                   \
+            r.org_x[i] = s->org[0], r.org_y[i] = s->org[1], r.org_z[i] = s->org[2];      \
+            r.dir_x[i] = s->dir[0], r.dir_y[i] = s->dir[1], r.dir_z[i] = s->dir[2];      \
+            r.tnear[i] = s->tmin, r.tfar[i] = s->tmax;                                   \
+            r.time[i] = 0, r.mask[i] = 0xffffffffu, r.id[i] = 0, r.flags[i] = 0;         \
+        }                                                                                \
+        rtcOccluded##W(valid, e->scene, &c.rtc, &r);                                     \
+        for (int i = 0; i < W && base + (size_t)i < n; i++)                              \
+            occluded[base + (size_t)i] = r.tfar[i] == -INFINITY;                         \
+    }
+
+sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
+                                     sc_embree_counters *ctr)
+{
+    if (!e || (width != 8 && width != 16) || (n && (!rays || !occluded)))
+        return SC_ERR_INVALID_ARGUMENT;
+    ctx_ext c;
+    ctx_init(&c, ctr, 1);
+    if (width == 8) {
+        OCCLUDED_LOOP(8)
+    } else {
+        OCCLUDED_LOOP(16)
+    }
+    if (ctr)
+        ctr->rays += n;
+    return SC_OK;
+}

@@ -133,6 +133,7 @@ SC_VI SC_ATTR_AVX2 f32x8_t f32x8_fmsub(f32x8_t a, f32x8_t b, f32x8_t c) { return
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_max(f32x8_t a, f32x8_t b) { return _mm256_max_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_min(f32x8_t a, f32x8_t b) { return _mm256_min_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_abs(f32x8_t a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sqrt(f32x8_t a) { return _mm256_sqrt_ps(a); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_lt(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_le(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_gt(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
@@ -144,6 +145,14 @@ SC_VI SC_ATTR_AVX2 f32x8_m f32x8_or(f32x8_m a, f32x8_m b) { return _mm256_or_ps(
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_andnot(f32x8_m a, f32x8_m b) { return _mm256_andnot_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sel(f32x8_m m, f32x8_t a, f32x8_t b) { return _mm256_blendv_ps(b, a, m); }
 SC_VI SC_ATTR_AVX2 uint32_t f32x8_bits(f32x8_m m) { return (uint32_t)_mm256_movemask_ps(m); }
+/* The smallest lane (no NaN lanes). */
+SC_VI SC_ATTR_AVX2 float f32x8_hmin(f32x8_t v)
+{
+    __m128 m = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+    m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+    m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
+    return _mm_cvtss_f32(m);
+}
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_mask_from_bits(uint32_t bits)
 {
     __m256i b = _mm256_set1_epi32((int)bits), sel = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
@@ -223,6 +232,7 @@ SC_VI SC_ATTR_AVX512 f32x16_t f32x16_fmsub(f32x16_t a, f32x16_t b, f32x16_t c) {
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_max(f32x16_t a, f32x16_t b) { return _mm512_max_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_min(f32x16_t a, f32x16_t b) { return _mm512_min_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_abs(f32x16_t a) { return _mm512_abs_ps(a); }
+SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sqrt(f32x16_t a) { return _mm512_sqrt_ps(a); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_lt(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_le(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_gt(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }
@@ -235,6 +245,7 @@ SC_VI SC_ATTR_AVX512 f32x16_m f32x16_andnot(f32x16_m a, f32x16_m b) { return (f3
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sel(f32x16_m m, f32x16_t a, f32x16_t b) { return _mm512_mask_blend_ps(m, b, a); }
 SC_VI SC_ATTR_AVX512 uint32_t f32x16_bits(f32x16_m m) { return (uint32_t)m; }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_mask_from_bits(uint32_t bits) { return (f32x16_m)bits; }
+SC_VI SC_ATTR_AVX512 float f32x16_hmin(f32x16_t v) { return _mm512_reduce_min_ps(v); }
 SC_VI SC_ATTR_AVX512 void f32x16_pow2pair(f32x16_t m, f32x16_t *down, f32x16_t *up)
 {
     m = _mm512_min_ps(_mm512_max_ps(m, _mm512_set1_ps(0x1p-126f)), _mm512_set1_ps(0x1p126f));

@@ -1,6 +1,8 @@
 /* Public entry points: argument checks, then the traversal kernels of the
  * active ISA level (src/isa) for the BVH's triangle test. A NULL stats
  * pointer selects the kernel compiled without counters. */
+#include <float.h>
+
 #include "bvh/bvh_internal.h"
 #include "isa/isa_dispatch.h"
 #include "ray_setup.h"
@@ -24,4 +26,276 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
     const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
     *occluded = stats ? k->any_stats(bvh, ray, stats) : k->any(bvh, ray);
     return SC_OK;
+}
+
+/* ---- packets ---------------------------------------------------------------
+ * One body per width: the argument checks, then the level's packet kernel,
+ * or lane by lane where it has none. */
+
+#define SC_RAY_OF(r, i) { { (r)->ox[i], (r)->oy[i], (r)->oz[i] }, (r)->tmin[i], { (r)->dx[i], (r)->dy[i], (r)->dz[i] }, (r)->tmax[i] }
+
+/* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
+ * conditions of sc_ray_valid, branch-free over the rows so that they
+ * vectorise (isfinite(d) as |d| <= FLT_MAX, which NaN fails). */
+static int64_t packet_lanes(const int32_t *valid, const float *ox, const float *oy, const float *oz,
+                            const float *tmin, const float *dx, const float *dy, const float *dz,
+                            const float *tmax, unsigned K)
+{
+    uint32_t lanes = 0, bad = 0;
+    for (unsigned i = 0; i < K; i++) {
+        const int ok = (fabsf(ox[i]) < SC_MAX_ORIGIN) & (fabsf(oy[i]) < SC_MAX_ORIGIN) &
+                       (fabsf(oz[i]) < SC_MAX_ORIGIN) & (fabsf(dx[i]) <= FLT_MAX) & (fabsf(dy[i]) <= FLT_MAX) &
+                       (fabsf(dz[i]) <= FLT_MAX) & ((dx[i] != 0) | (dy[i] != 0) | (dz[i] != 0)) &
+                       (tmin[i] >= 0) & (tmax[i] == tmax[i]);
+        const uint32_t v = valid[i] != 0;
+        lanes |= v << i;
+        bad |= (v & (uint32_t)!ok) << i;
+    }
+    return bad ? (int64_t)-1 : (int64_t)lanes;
+}
+#define PACKET_LANES(valid, r, K)                                                                    \
+    packet_lanes(valid, (r)->ox, (r)->oy, (r)->oz, (r)->tmin, (r)->dx, (r)->dy, (r)->dz, (r)->tmax, K)
+
+static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 1)) == 0; }
+
+static void closest_lanes(const sc_trace_kernels *k, const sc_bvh *bvh, const sc_ray *r, sc_hitrec *h,
+                          sc_trace_stats *st)
+{
+    if (st)
+        k->closest_stats(bvh, r, h, st);
+    else
+        k->closest(bvh, r, h);
+}
+
+sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                            sc_hit_packet8 *hits, sc_trace_stats *stats)
+{
+    if (!bvh || !valid || !rays || !hits || !aligned_to(rays, 32) || !aligned_to(hits, 32))
+        return SC_ERR_INVALID_ARGUMENT;
+    int64_t lanes = PACKET_LANES(valid, rays, 8);
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (k->closest_p8) {
+        k->closest_p8(bvh, rays, (uint32_t)lanes, hits, stats);
+        return SC_OK;
+    }
+    for (unsigned i = 0; i < 8; i++) {
+        if (!((lanes >> i) & 1))
+            continue;
+        const sc_ray r = SC_RAY_OF(rays, i);
+        sc_hitrec h;
+        closest_lanes(k, bvh, &r, &h, stats);
+        hits->t[i] = h.t, hits->u[i] = h.u, hits->v[i] = h.v, hits->prim[i] = h.prim;
+    }
+    return SC_OK;
+}
+
+sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                        int32_t occluded[8], sc_trace_stats *stats)
+{
+    if (!bvh || !valid || !rays || !occluded || !aligned_to(rays, 32))
+        return SC_ERR_INVALID_ARGUMENT;
+    int64_t lanes = PACKET_LANES(valid, rays, 8);
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (k->any_p8) {
+        k->any_p8(bvh, rays, (uint32_t)lanes, occluded, stats);
+        return SC_OK;
+    }
+    for (unsigned i = 0; i < 8; i++) {
+        if (!((lanes >> i) & 1))
+            continue;
+        const sc_ray r = SC_RAY_OF(rays, i);
+        occluded[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
+    }
+    return SC_OK;
+}
+
+/* Half h (0 or 1) of a 16-ray packet as an 8-ray packet. */
+static void packet_half(const sc_ray_packet16 *r, unsigned h, sc_ray_packet8 *o)
+{
+    for (unsigned i = 0; i < 8; i++) {
+        unsigned j = 8 * h + i;
+        o->ox[i] = r->ox[j], o->oy[i] = r->oy[j], o->oz[i] = r->oz[j], o->tmin[i] = r->tmin[j];
+        o->dx[i] = r->dx[j], o->dy[i] = r->dy[j], o->dz[i] = r->dz[j], o->tmax[i] = r->tmax[j];
+    }
+}
+
+sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                             sc_hit_packet16 *hits, sc_trace_stats *stats)
+{
+    if (!bvh || !valid || !rays || !hits || !aligned_to(rays, 64) || !aligned_to(hits, 64))
+        return SC_ERR_INVALID_ARGUMENT;
+    int64_t lanes = PACKET_LANES(valid, rays, 16);
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (k->closest_p16) {
+        k->closest_p16(bvh, rays, (uint32_t)lanes, hits, stats);
+        return SC_OK;
+    }
+    if (k->closest_p8) {
+        for (unsigned h = 0; h < 2; h++) {
+            uint32_t hl = (uint32_t)(lanes >> (8 * h)) & 0xff;
+            if (!hl)
+                continue;
+            sc_ray_packet8 r8;
+            sc_hit_packet8 h8;
+            packet_half(rays, h, &r8);
+            k->closest_p8(bvh, &r8, hl, &h8, stats);
+            for (uint32_t e = hl; e; e &= e - 1) {
+                unsigned i = (unsigned)__builtin_ctz(e), j = 8 * h + i;
+                hits->t[j] = h8.t[i], hits->u[j] = h8.u[i], hits->v[j] = h8.v[i], hits->prim[j] = h8.prim[i];
+            }
+        }
+        return SC_OK;
+    }
+    for (unsigned i = 0; i < 16; i++) {
+        if (!((lanes >> i) & 1))
+            continue;
+        const sc_ray r = SC_RAY_OF(rays, i);
+        sc_hitrec h;
+        closest_lanes(k, bvh, &r, &h, stats);
+        hits->t[i] = h.t, hits->u[i] = h.u, hits->v[i] = h.v, hits->prim[i] = h.prim;
+    }
+    return SC_OK;
+}
+
+sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                         int32_t occluded[16], sc_trace_stats *stats)
+{
+    if (!bvh || !valid || !rays || !occluded || !aligned_to(rays, 64))
+        return SC_ERR_INVALID_ARGUMENT;
+    int64_t lanes = PACKET_LANES(valid, rays, 16);
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (k->any_p16) {
+        k->any_p16(bvh, rays, (uint32_t)lanes, occluded, stats);
+        return SC_OK;
+    }
+    if (k->any_p8) {
+        for (unsigned h = 0; h < 2; h++) {
+            uint32_t hl = (uint32_t)(lanes >> (8 * h)) & 0xff;
+            if (!hl)
+                continue;
+            sc_ray_packet8 r8;
+            int32_t o8[8];
+            packet_half(rays, h, &r8);
+            k->any_p8(bvh, &r8, hl, o8, stats);
+            for (uint32_t e = hl; e; e &= e - 1) {
+                unsigned i = (unsigned)__builtin_ctz(e);
+                occluded[8 * h + i] = o8[i];
+            }
+        }
+        return SC_OK;
+    }
+    for (unsigned i = 0; i < 16; i++) {
+        if (!((lanes >> i) & 1))
+            continue;
+        const sc_ray r = SC_RAY_OF(rays, i);
+        occluded[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
+    }
+    return SC_OK;
+}
+
+/* ---- streams ---------------------------------------------------------------
+ * Runs of 16 rays that look coherent go as a packet, the rest one by one.
+ * Coherent: the unit directions of the run (its valid rays) lie in a box of
+ * side <= SC_STREAM_SPREAD per axis, about 11 degrees: camera tiles and
+ * shadow rays of a tile to one light pass, diffuse and random rays do not. */
+#define SC_STREAM_SPREAD 0.2f
+
+static int run_coherent(const sc_ray *const *r, unsigned k)
+{
+    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (unsigned i = 0; i < k; i++) {
+        const float *d = r[i]->dir;
+        float l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(l > 0))
+            return 0;
+        for (int a = 0; a < 3; a++) {
+            float u = d[a] / l;
+            lo[a] = u < lo[a] ? u : lo[a];
+            hi[a] = u > hi[a] ? u : hi[a];
+        }
+    }
+    return hi[0] - lo[0] <= SC_STREAM_SPREAD && hi[1] - lo[1] <= SC_STREAM_SPREAD &&
+           hi[2] - lo[2] <= SC_STREAM_SPREAD;
+}
+
+static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
+                        size_t n, unsigned flags, sc_trace_stats *stats, int any)
+{
+    if (!bvh || (n && (!rays || !out)) || ray_stride < sizeof(sc_ray) ||
+        out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || (flags & ~(unsigned)SC_TRACE_INCOHERENT))
+        return SC_ERR_INVALID_ARGUMENT;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    const int packets = !(flags & SC_TRACE_INCOHERENT) && (k->closest_p16 || k->closest_p8);
+    sc_status status = SC_OK;
+    for (size_t base = 0; base < n; base += 16) {
+        const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
+        const sc_ray *run[16];
+        for (unsigned i = 0; i < cnt; i++)
+            run[i] = (const sc_ray *)(const void *)((const char *)rays + (base + i) * ray_stride);
+        char *o0 = (char *)out + base * out_stride;
+        if (packets && cnt > 1 && run_coherent(run, cnt)) {
+            sc_ray_packet16 p __attribute__((aligned(64)));
+            int32_t valid[16];
+            for (unsigned i = 0; i < 16; i++) {
+                const sc_ray *r = run[i < cnt ? i : cnt - 1];
+                valid[i] = i < cnt && sc_ray_valid(r);
+                p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
+                p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
+            }
+            if (any) {
+                int32_t occ[16];
+                sc_trace_any16(bvh, valid, &p, occ, stats);
+                for (unsigned i = 0; i < cnt; i++)
+                    if (valid[i])
+                        *(int32_t *)(void *)(o0 + i * out_stride) = occ[i];
+            } else {
+                sc_hit_packet16 h __attribute__((aligned(64)));
+                sc_trace_closest16(bvh, valid, &p, &h, stats);
+                for (unsigned i = 0; i < cnt; i++) {
+                    if (!valid[i])
+                        continue;
+                    sc_hitrec *o = (sc_hitrec *)(void *)(o0 + i * out_stride);
+                    o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
+                }
+            }
+            for (unsigned i = 0; i < cnt; i++)
+                if (!valid[i])
+                    status = SC_ERR_INVALID_ARGUMENT;
+            continue;
+        }
+        for (unsigned i = 0; i < cnt; i++) {
+            sc_status st;
+            if (any) {
+                int o = 0;
+                st = sc_trace_any(bvh, run[i], &o, stats);
+                if (st == SC_OK)
+                    *(int32_t *)(void *)(o0 + i * out_stride) = o;
+            } else {
+                st = sc_trace_closest(bvh, run[i], (sc_hitrec *)(void *)(o0 + i * out_stride), stats);
+            }
+            if (st != SC_OK)
+                status = st;
+        }
+    }
+    return status;
+}
+
+sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
+                             size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *stats)
+{
+    return stream(bvh, rays, ray_stride, hits, hit_stride, n, flags, stats, 0);
+}
+
+sc_status sc_trace_any_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
+                         size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *stats)
+{
+    return stream(bvh, rays, ray_stride, occluded, occluded_stride, n, flags, stats, 1);
 }

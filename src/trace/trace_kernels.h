@@ -12,6 +12,17 @@ typedef struct sc_trace_kernels {
     int (*any)(const sc_bvh *bvh, const sc_ray *ray);
     void (*closest_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
     int (*any_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_trace_stats *st);
+    /* Packets (lanes: the valid lanes, rays checked; st may be NULL). NULL
+     * where a level has no packet kernel for the test: trace_api.c then
+     * traces the lanes one by one (the specification). */
+    void (*closest_p8)(const sc_bvh *bvh, const sc_ray_packet8 *rays, uint32_t lanes, sc_hit_packet8 *hits,
+                       sc_trace_stats *st);
+    void (*any_p8)(const sc_bvh *bvh, const sc_ray_packet8 *rays, uint32_t lanes, int32_t *occluded,
+                   sc_trace_stats *st);
+    void (*closest_p16)(const sc_bvh *bvh, const sc_ray_packet16 *rays, uint32_t lanes, sc_hit_packet16 *hits,
+                        sc_trace_stats *st);
+    void (*any_p16)(const sc_bvh *bvh, const sc_ray_packet16 *rays, uint32_t lanes, int32_t *occluded,
+                    sc_trace_stats *st);
 } sc_trace_kernels;
 
 /* [sc_tri_test]. The x86 tables exist only in x86 builds. */

@@ -67,7 +67,8 @@ static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned
 const sc_trace_kernels sc_trace_kernels_scalar[SC_TRI_TEST_COUNT] = SC_TRACE_KERNEL_TABLE;
 
 /* Every leaf, no box tests, no prefilter: a same-arithmetic oracle for the
- * traversal (it can only differ on exact ties in t). */
+ * traversal (of equal t the smaller id, as the traversal; with SC_TRI_EXACT
+ * the first exact tie found). */
 sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit)
 {
     if (!bvh || !ray || !hit || !sc_ray_valid(ray))
@@ -109,12 +110,15 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
                 }
                 continue;
             }
-            const unsigned bi = sc_nearest_lane(hm, t);
-            tmax = t[bi];
-            hit->t = t[bi];
-            hit->prim = sc_leaf_prims(rows, W)[bi];
-            hit->u = un[bi] / den[bi];
-            hit->v = vn[bi] / den[bi];
+            const uint32_t *prims = sc_leaf_prims(rows, W);
+            const unsigned bi = sc_nearest_lane(hm, t, prims);
+            if (t[bi] < tmax || prims[bi] < hit->prim) {
+                tmax = t[bi];
+                hit->t = t[bi];
+                hit->prim = prims[bi];
+                hit->u = un[bi] / den[bi];
+                hit->v = vn[bi] / den[bi];
+            }
         }
     }
     return SC_OK;

@@ -144,11 +144,17 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
                         st->tri_hits += (uint64_t)__builtin_popcount(hm);
                     if (ANY)
                         return 1;
-                    const unsigned bi = sc_nearest_lane(hm, t);
-                    tmax = t[bi];
-                    best_prim = sc_leaf_prims(rows, W)[bi];
-                    best_u = un[bi] / den[bi];
-                    best_v = vn[bi] / den[bi];
+                    const uint32_t *prims = sc_leaf_prims(rows, W);
+                    const unsigned bi = sc_nearest_lane(hm, t, prims);
+                    /* t[bi] <= tmax; of equal t the smaller id, so that the
+                     * answer does not depend on the order of the leaves
+                     * (packets visit them in another order) */
+                    if (t[bi] < tmax || prims[bi] < best_prim) {
+                        tmax = t[bi];
+                        best_prim = prims[bi];
+                        best_u = un[bi] / den[bi];
+                        best_v = vn[bi] / den[bi];
+                    }
                 }
             }
         }
@@ -255,11 +261,16 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
     return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_EXACT, -1);
 }
 
-/* Initializer of a sc_trace_kernels[SC_TRI_TEST_COUNT] table. */
+/* Initializer of a sc_trace_kernels[SC_TRI_TEST_COUNT] table; a translation
+ * unit with packet kernels (watertight only) defines
+ * SC_TRACE_PACKETS_WATERTIGHT as their list, with a leading comma. */
+#ifndef SC_TRACE_PACKETS_WATERTIGHT
+#define SC_TRACE_PACKETS_WATERTIGHT
+#endif
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
         [SC_TRI_WATERTIGHT] = { closest_watertight, any_watertight, closest_stats_watertight,         \
-                                any_stats_watertight },                                               \
+                                any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT },                   \
         [SC_TRI_MOLLER] = { closest_moller, any_moller, closest_stats_moller, any_stats_moller },     \
         [SC_TRI_EXACT] = { closest_exact, any_exact, closest_stats_exact, any_stats_exact },          \
     }

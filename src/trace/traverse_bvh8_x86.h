@@ -84,4 +84,24 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
 }
 
 
+/* the packet kernels below, for the kernel table */
+#if SC_X86_AVX512
+#define SC_TRACE_PACKETS_WATERTIGHT , closest_packet8, any_packet8, closest_packet16, any_packet16
+#else
+#define SC_TRACE_PACKETS_WATERTIGHT , closest_packet8, any_packet8
+#endif
 #include "traverse_bvh8_single.h"
+
+/* Packets of 8 rays in ymm registers, and on AVX-512 of 16 in zmm. */
+#define VP f32x8
+#define PK 8
+#include "traverse_bvh8_packet.h"
+#undef VP
+#undef PK
+#if SC_X86_AVX512
+#define VP f32x16
+#define PK 16
+#include "traverse_bvh8_packet.h"
+#undef VP
+#undef PK
+#endif

@@ -60,13 +60,13 @@ SC_TRACE_INLINE uint64_t sc_order_children(const sc_bvh_node8 *node, unsigned ma
 }
 
 /* The lane of the smallest t among the hit lanes hm (hm != 0); of equal t
- * the lowest lane. */
-SC_TRACE_INLINE unsigned sc_nearest_lane(unsigned hm, const float *t)
+ * the smallest primitive id. */
+SC_TRACE_INLINE unsigned sc_nearest_lane(unsigned hm, const float *t, const uint32_t *prim)
 {
     unsigned bi = (unsigned)__builtin_ctz(hm);
     for (unsigned rest = hm & (hm - 1); rest; rest &= rest - 1) {
         unsigned i = (unsigned)__builtin_ctz(rest);
-        if (t[i] < t[bi])
+        if (t[i] < t[bi] || (t[i] == t[bi] && prim[i] < prim[bi]))
             bi = i;
     }
     return bi;

@@ -1,0 +1,561 @@
+/* The packet traversal of the 8-wide BVH: PK rays (8 or 16), one per vector
+ * lane, walk the tree together; one body for every ISA and width. The
+ * translation unit (traverse_bvh8_x86.h) defines before each inclusion
+ *   SC_TARGET, SC_X86_INLINE   as for the single-ray template
+ *   PK                         the packet width, 8 or 16
+ *   VP                         the simd_vec.h shape with PK lanes
+ * and gets closest_packet<PK>() and any_packet<PK>() for the watertight test.
+ *
+ * Exactness. Every lane is the single-ray query of traverse_bvh8_single.h
+ * with the same triangle test: the per-ray constants are sc_ray_precompute's,
+ * each box test of a lane is the single ray's (node_bvh8_slab.h), and the
+ * triangle test is tri_watertight.h's operation sequence with the rays in the
+ * lanes instead of the triangles (no FMA, same order), so a lane computes
+ * the same t, U, V, W, det bits for a triangle as the single ray does. The
+ * closest hit is the smallest (t, prim) of the triangles a lane tests, which
+ * does not depend on the order they are visited in. A packet visits more
+ * boxes than each of its rays would; a lane only ever tests triangles whose
+ * boxes it passes itself (the lane masks go down the tree with the nodes).
+ *
+ * Spheres. A packet whose rays share their origin (camera rays) is bounded
+ * by a cone around the mean direction; a leaf's circumspheres that lie
+ * outside the cone remove their triangles for every ray of the packet at
+ * once (pk_cone_cull), before the triangle tests: the job where one sphere
+ * test replaces PK ray-triangle tests.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "bvh/bvh_internal.h"
+#include "traverse_stack.h"
+
+#define PCAT_(a, b) a##_##b
+#define PCAT(a, b) PCAT_(a, b)
+#define PV(op) PCAT(VP, op)
+#define PGLUE_(a, b) a##b
+#define PGLUE(a, b) PGLUE_(a, b)
+#define PFN(name) PGLUE(name, PK)
+#define PKT PGLUE(sc_ray_packet, PK)
+#define HITP PGLUE(sc_hit_packet, PK)
+#define PALL ((uint32_t)((1ull << PK) - 1))
+
+typedef PV(t) PFN(pvec);
+#define pvec PFN(pvec)
+
+typedef struct {
+    float rd[3][PK] __attribute__((aligned(64)));
+    float ordn[3][PK] __attribute__((aligned(64)));
+    float ordf[3][PK] __attribute__((aligned(64)));
+    float org[3][PK] __attribute__((aligned(64)));
+    float Sx[PK] __attribute__((aligned(64)));
+    float Sy[PK] __attribute__((aligned(64)));
+    float Sz[PK] __attribute__((aligned(64)));
+    float tmin[PK] __attribute__((aligned(64)));
+    float tmax[PK] __attribute__((aligned(64)));
+    uint32_t neg[3];              /* lanes whose direction is negative on axis k */
+    uint32_t kx1, kx2, ky1, ky2, kz1, kz2;   /* lanes whose shear axis kx (ky, kz) is 1 or 2 */
+    int uniform;                  /* every traced lane has the same octant and shear axes */
+    int kx, ky, kz, oct;          /* those, when uniform */
+    int cone;                     /* every traced lane has the same origin: the cone below */
+    float apex[3], axis[3], cos_t, sin_t;
+} PFN(pk_ctx);
+#define pk_ctx PFN(pk_ctx)
+
+/* Pick lanes of a, b, c by the lane masks m1 (take b) and m2 (take c). */
+SC_X86_INLINE pvec PFN(pk_sel3)(uint32_t m1, uint32_t m2, pvec a, pvec b, pvec c)
+{
+    return PV(sel)(PV(mask_from_bits)(m2), c, PV(sel)(PV(mask_from_bits)(m1), b, a));
+}
+
+/* The cone around the packet (lanes: the traced lanes, origins equal): unit
+ * directions n_i, axis a their normalised sum; sin_t >= every |a x n_i|
+ * with 2^-18 to spare for the float rounding of n_i, a and the products
+ * (each below 2^-21), cos_t <= the matching cosine. Only for packets
+ * narrower than 60 degrees (every a.n_i > 1/2), where a cone can cull. */
+SC_X86_INLINE int PFN(pk_cone)(pk_ctx *c, pvec dx, pvec dy, pvec dz, uint32_t lanes, const PKT *r)
+{
+    const PV(m) lm = PV(mask_from_bits)(lanes);
+    const pvec zero = PV(set1)(0);
+    pvec l = PV(sqrt)(PV(add)(PV(add)(PV(mul)(dx, dx), PV(mul)(dy, dy)), PV(mul)(dz, dz)));
+    pvec nx = PV(sel)(lm, PV(div)(dx, l), zero), ny = PV(sel)(lm, PV(div)(dy, l), zero),
+         nz = PV(sel)(lm, PV(div)(dz, l), zero);
+    /* the sum of the directions: sum the lanes through memory (PK <= 16) */
+    float sx[PK], sy[PK], sz[PK];
+    PV(store)(sx, nx), PV(store)(sy, ny), PV(store)(sz, nz);
+    float tx = 0, ty = 0, tz = 0;
+    for (unsigned i = 0; i < PK; i++)
+        tx += sx[i], ty += sy[i], tz += sz[i];
+    float al = sqrtf(tx * tx + ty * ty + tz * tz);
+    if (!(al > 0))
+        return 0;
+    tx /= al, ty /= al, tz /= al;
+    const pvec Ax = PV(set1)(tx), Ay = PV(set1)(ty), Az = PV(set1)(tz);
+    pvec cx = PV(sub)(PV(mul)(Ay, nz), PV(mul)(Az, ny)), cy = PV(sub)(PV(mul)(Az, nx), PV(mul)(Ax, nz)),
+         cz = PV(sub)(PV(mul)(Ax, ny), PV(mul)(Ay, nx));
+    pvec co = PV(add)(PV(add)(PV(mul)(Ax, nx), PV(mul)(Ay, ny)), PV(mul)(Az, nz));
+    if ((PV(bits)(PV(gt)(co, PV(set1)(0.5f))) & lanes) != lanes)
+        return 0;
+    pvec sn = PV(sel)(lm, PV(sqrt)(PV(add)(PV(add)(PV(mul)(cx, cx), PV(mul)(cy, cy)), PV(mul)(cz, cz))), zero);
+    float s = -PV(hmin)(PV(sub)(zero, sn));
+    s = s * (1 + 0x1p-10f) + 0x1p-18f;
+    if (!(s < 0.86f))
+        return 0;
+    c->axis[0] = tx, c->axis[1] = ty, c->axis[2] = tz;
+    c->sin_t = s;
+    c->cos_t = sqrtf(1 - s * s) * (1 - 0x1p-18f);
+    const unsigned f = (unsigned)__builtin_ctz(lanes);
+    c->apex[0] = r->ox[f], c->apex[1] = r->oy[f], c->apex[2] = r->oz[f];
+    return 1;
+}
+
+/* Per-lane set-up of the traced lanes in vectors: sc_ray_precompute's
+ * operations (and sc_shear_axes' choice) lane by lane, so every lane has
+ * the single ray's bits. Returns the lanes that are parallel rays (some
+ * |d_k| < SC_MIN_RCP_INPUT): the caller traces those singly. Untraced lanes
+ * are loaded as a copy of a traced lane, so no vector operation sees
+ * garbage. cone: try the cone (the BVH has spheres). */
+SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, uint32_t lanes, int cone)
+{
+    const unsigned f = (unsigned)__builtin_ctz(lanes);
+    const PV(m) lm = PV(mask_from_bits)(lanes);
+#define LD(row) PV(sel)(lm, PV(load)(r->row), PV(set1)(r->row[f]))
+    const pvec o[3] = { LD(ox), LD(oy), LD(oz) }, d[3] = { LD(dx), LD(dy), LD(dz) };
+    const pvec tmin = LD(tmin), tmax = LD(tmax);
+#undef LD
+    const pvec tiny = PV(set1)(SC_MIN_RCP_INPUT), one = PV(set1)(1.0f);
+    pvec ad[3];
+    uint32_t par = 0;
+    for (int k = 0; k < 3; k++) {
+        ad[k] = PV(abs)(d[k]);
+        par |= PV(bits)(PV(lt)(ad[k], tiny));
+    }
+    par &= lanes;
+    const uint32_t tl = lanes & ~par;
+    c->uniform = 1;
+    c->cone = 0;
+    if (!tl)
+        return par;
+    for (int k = 0; k < 3; k++) {
+        const pvec rd = PV(div)(one, d[k]);
+        const pvec m = PV(max)(PV(abs)(PV(sub)(PV(set1)(bvh->root_lo[k]), o[k])),
+                               PV(abs)(PV(sub)(PV(set1)(bvh->root_hi[k]), o[k])));
+        const pvec g = PV(fmadd)(PV(abs)(o[k]), PV(set1)(0x1.0cp-23f),
+                                 PV(fmadd)(m, PV(set1)(0x1.0cp-23f), PV(set1)(0x1p-123f)));
+        const pvec pad = PV(fmadd)(PV(abs)(rd), g, PV(fmadd)(m, PV(set1)(0x1p-124f), PV(set1)(0x1p-122f)));
+        const pvec ord = PV(mul)(o[k], rd);
+        PV(store)(c->rd[k], rd);
+        PV(store)(c->ordn[k], PV(add)(ord, pad));
+        PV(store)(c->ordf[k], PV(sub)(ord, pad));
+        PV(store)(c->org[k], o[k]);
+        c->neg[k] = PV(bits)(PV(lt)(d[k], PV(set1)(0))) & tl;
+        if (c->neg[k] != 0 && c->neg[k] != tl)
+            c->uniform = 0;
+    }
+    /* sc_shear_axes: kz = 0; |d1| > |d0| -> 1; |d2| > |d_kz| -> 2 */
+    const PV(m) z1 = PV(gt)(ad[1], ad[0]);
+    const pvec akz = PV(sel)(z1, ad[1], ad[0]);
+    const PV(m) z2 = PV(gt)(ad[2], akz);
+    const uint32_t kz1 = PV(bits)(z1) & ~PV(bits)(z2), kz2 = PV(bits)(z2);
+    const uint32_t kz0 = ~(kz1 | kz2);
+    /* kx = kz + 1, ky = kx + 1 (mod 3), swapped where d[kz] < 0 */
+    const pvec dkz = PFN(pk_sel3)(kz1, kz2, d[0], d[1], d[2]);
+    const uint32_t sw = PV(bits)(PV(lt)(dkz, PV(set1)(0)));
+    /* unswapped: kz 0 -> (1, 2), 1 -> (2, 0), 2 -> (0, 1) */
+    const uint32_t kx1 = kz0, kx2 = kz1, ky1 = kz2, ky2 = kz0;
+    c->kx1 = ((kx1 & ~sw) | (ky1 & sw)) & tl, c->kx2 = ((kx2 & ~sw) | (ky2 & sw)) & tl;
+    c->ky1 = ((ky1 & ~sw) | (kx1 & sw)) & tl, c->ky2 = ((ky2 & ~sw) | (kx2 & sw)) & tl;
+    c->kz1 = kz1 & tl, c->kz2 = kz2 & tl;
+    const pvec dkx = PFN(pk_sel3)(c->kx1, c->kx2, d[0], d[1], d[2]);
+    const pvec dky = PFN(pk_sel3)(c->ky1, c->ky2, d[0], d[1], d[2]);
+    PV(store)(c->Sx, PV(div)(dkx, dkz));
+    PV(store)(c->Sy, PV(div)(dky, dkz));
+    PV(store)(c->Sz, PV(div)(one, dkz));
+    PV(store)(c->tmin, tmin);
+    PV(store)(c->tmax, tmax);
+    for (uint32_t *mk = &c->kx1; mk <= &c->kz2; mk++)
+        if (*mk != 0 && *mk != tl)
+            c->uniform = 0;
+    const uint32_t first = 1u << __builtin_ctz(tl);
+    c->oct = (c->neg[0] & first ? 1 : 0) | (c->neg[1] & first ? 2 : 0) | (c->neg[2] & first ? 4 : 0);
+    c->kx = c->kx1 & first ? 1 : c->kx2 & first ? 2 : 0;
+    c->ky = c->ky1 & first ? 1 : c->ky2 & first ? 2 : 0;
+    c->kz = c->kz1 & first ? 1 : c->kz2 & first ? 2 : 0;
+    if (cone && __builtin_popcount(tl) > 1) {
+        /* one origin: every traced lane's bits equal the first's */
+        const unsigned ff = (unsigned)__builtin_ctz(tl);
+        uint32_t same = tl;
+        for (int k = 0; k < 3; k++)
+            same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
+        if (same == tl)
+            c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
+    }
+    return par;
+}
+
+/* Spheres of lanes [0, W) of a leaf's sphere block that lie outside the
+ * packet's cone: a bit set means no ray of the packet meets the sphere.
+ * With v = c - apex, d = v.a and e = |v x a| (the cross product, not
+ * sqrt(v.v - d^2), which cancels near the axis), the sphere is outside the
+ * cone when e cos - max(d, 0) sin > r (the distance from the centre to the
+ * cone's surface; d <= 0 only ever loosens the test, so the cone's sin and
+ * cos may both err outward). The rounding of v, d and e is below 2^-21 |v|;
+ * r grows by 2^-16 (|vx| + |vy| + |vz|) and 2^-16 r. Centres with v.v
+ * outside [2^-100, 2^100] (subnormal or flushed products, overflow) and
+ * empty lanes are never culled here. */
+SC_X86_INLINE uint32_t PFN(pk_cone_cull)(const pk_ctx *c, const float *blk, unsigned W)
+{
+    const pvec ax = PV(set1)(c->axis[0]), ay = PV(set1)(c->axis[1]), az = PV(set1)(c->axis[2]);
+    const pvec cs = PV(set1)(c->cos_t), sn = PV(set1)(c->sin_t), zero = PV(set1)(0);
+    const pvec grow = PV(set1)(1 + 0x1p-16f), slack = PV(set1)(0x1p-16f);
+    uint32_t cull = 0;
+    for (unsigned h = 0; h < W; h += PK) {
+        pvec vx = PV(sub)(PV(load)(blk + h), PV(set1)(c->apex[0]));
+        pvec vy = PV(sub)(PV(load)(blk + W + h), PV(set1)(c->apex[1]));
+        pvec vz = PV(sub)(PV(load)(blk + 2 * W + h), PV(set1)(c->apex[2]));
+        pvec r2 = PV(load)(blk + 3 * W + h);
+        pvec vv = PV(add)(PV(add)(PV(mul)(vx, vx), PV(mul)(vy, vy)), PV(mul)(vz, vz));
+        pvec d = PV(add)(PV(add)(PV(mul)(vx, ax), PV(mul)(vy, ay)), PV(mul)(vz, az));
+        pvec ex = PV(sub)(PV(mul)(vy, az), PV(mul)(vz, ay));
+        pvec ey = PV(sub)(PV(mul)(vz, ax), PV(mul)(vx, az));
+        pvec ez = PV(sub)(PV(mul)(vx, ay), PV(mul)(vy, ax));
+        pvec ee = PV(add)(PV(add)(PV(mul)(ex, ex), PV(mul)(ey, ey)), PV(mul)(ez, ez));
+        pvec l1 = PV(add)(PV(add)(PV(abs)(vx), PV(abs)(vy)), PV(abs)(vz));
+        pvec r = PV(add)(PV(mul)(PV(sqrt)(PV(max)(r2, zero)), grow), PV(mul)(l1, slack));
+        pvec rhs = PV(add)(r, PV(mul)(PV(max)(d, zero), sn));
+        pvec lhs = PV(mul)(PV(sqrt)(ee), cs);
+        PV(m) out = PV(gt)(lhs, rhs);
+        PV(m) trusted = PV(and)(PV(and)(PV(ge)(vv, PV(set1)(0x1p-100f)), PV(le)(vv, PV(set1)(0x1p100f))),
+                                PV(ge)(r2, zero));
+        cull |= PV(bits)(PV(and)(out, trusted)) << h;
+    }
+    return cull;
+}
+
+typedef struct {
+    uint64_t ref;
+    uint32_t mask;
+    float dist;
+} PFN(pk_entry);
+
+/* The traversal. UNI = 1: every lane has the packet's octant and shear axes
+ * (the near planes and the sheared axes are the same rows for all lanes). */
+SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
+                                        int32_t *occluded, const pk_ctx *c, sc_trace_stats *st,
+                                        const int ANY, const int STATS, const int UNI)
+{
+    const pvec rd0 = PV(load)(c->rd[0]), rd1 = PV(load)(c->rd[1]), rd2 = PV(load)(c->rd[2]);
+    const pvec on0 = PV(load)(c->ordn[0]), on1 = PV(load)(c->ordn[1]), on2 = PV(load)(c->ordn[2]);
+    const pvec of0 = PV(load)(c->ordf[0]), of1 = PV(load)(c->ordf[1]), of2 = PV(load)(c->ordf[2]);
+    const pvec tminv = PV(load)(c->tmin);
+    const pvec inf = PV(set1)(INFINITY);
+    pvec tmaxv = PV(load)(c->tmax);
+    /* the best hit so far per lane (closest): its t is tmaxv */
+    pvec bun = PV(set1)(0), bvn = PV(set1)(0), bden = PV(set1)(1);
+    uint32_t bprim[PK] __attribute__((aligned(64)));
+    for (unsigned i = 0; i < PK; i++)
+        bprim[i] = SC_HITREC_MISS;
+    uint32_t alive = lanes;       /* any: lanes not yet occluded */
+    PFN(pk_entry) stack[SC_TRACE_STACK];
+    int sp = 0;
+    /* near/far rows of a uniform packet */
+    const int oct = c->oct;
+    const int nr0 = (oct & 1), nr1 = 2 + ((oct >> 1) & 1), nr2 = 4 + ((oct >> 2) & 1);
+    const int fr0 = 1 - (oct & 1), fr1 = 3 - ((oct >> 1) & 1), fr2 = 5 - ((oct >> 2) & 1);
+    PV(m) ng0 = PV(mask_from_bits)(c->neg[0]), ng1 = PV(mask_from_bits)(c->neg[1]),
+          ng2 = PV(mask_from_bits)(c->neg[2]);
+    if (STATS)
+        st->rays += (uint64_t)__builtin_popcount(lanes);
+    if (!bvh->has_root || !lanes)
+        goto done;
+
+    uint64_t ref = 0;
+    uint32_t m = lanes;
+    for (;;) {
+        while (!sc_ref_is_leaf(ref)) {
+            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+            if (STATS)
+                st->nodes++;
+            uint64_t hr[SC_BVH_N];
+            uint32_t hmk[SC_BVH_N];
+            float hd[SC_BVH_N];
+            pvec htn[SC_BVH_N];
+            int cnt = 0;
+            for (int k = 0; k < SC_BVH_N; k++) {
+                if (!node->child[k])
+                    continue;
+                pvec nx, ny, nz, fx, fy, fz;
+                if (UNI) {
+                    nx = PV(set1)(node->b[nr0][k]), fx = PV(set1)(node->b[fr0][k]);
+                    ny = PV(set1)(node->b[nr1][k]), fy = PV(set1)(node->b[fr1][k]);
+                    nz = PV(set1)(node->b[nr2][k]), fz = PV(set1)(node->b[fr2][k]);
+                } else {
+                    pvec lx = PV(set1)(node->b[0][k]), hx = PV(set1)(node->b[1][k]);
+                    pvec ly = PV(set1)(node->b[2][k]), hy = PV(set1)(node->b[3][k]);
+                    pvec lz = PV(set1)(node->b[4][k]), hz = PV(set1)(node->b[5][k]);
+                    nx = PV(sel)(ng0, hx, lx), fx = PV(sel)(ng0, lx, hx);
+                    ny = PV(sel)(ng1, hy, ly), fy = PV(sel)(ng1, ly, hy);
+                    nz = PV(sel)(ng2, hz, lz), fz = PV(sel)(ng2, lz, hz);
+                }
+                pvec tn = PV(max)(PV(max)(PV(fmsub)(nx, rd0, on0), PV(fmsub)(ny, rd1, on1)),
+                                  PV(max)(PV(fmsub)(nz, rd2, on2), tminv));
+                pvec tf = PV(min)(PV(min)(PV(fmsub)(fx, rd0, of0), PV(fmsub)(fy, rd1, of1)),
+                                  PV(min)(PV(fmsub)(fz, rd2, of2), tmaxv));
+                uint32_t mk = PV(bits)(PV(le)(tn, tf)) & m;
+                if (!mk)
+                    continue;
+                hr[cnt] = node->child[k];
+                hmk[cnt] = mk;
+                htn[cnt] = tn;
+                cnt++;
+            }
+            if (cnt == 0)
+                goto pop;
+            if (cnt == 1) {
+                ref = hr[0];
+                m = hmk[0];
+                continue;
+            }
+            if (!ANY) {
+                /* the nearest entry of each hit child's active lanes */
+                for (int i = 0; i < cnt; i++)
+                    hd[i] = PV(hmin)(PV(sel)(PV(mask_from_bits)(hmk[i]), htn[i], inf));
+                /* near first: insertion sort of the few hit children */
+                for (int i = 1; i < cnt; i++) {
+                    uint64_t rr = hr[i];
+                    uint32_t mm = hmk[i];
+                    float dd = hd[i];
+                    int j = i;
+                    while (j > 0 && hd[j - 1] > dd) {
+                        hr[j] = hr[j - 1], hmk[j] = hmk[j - 1], hd[j] = hd[j - 1];
+                        j--;
+                    }
+                    hr[j] = rr, hmk[j] = mm, hd[j] = dd;
+                }
+            }
+            for (int i = cnt - 1; i > 0; i--) {
+                stack[sp].ref = hr[i];
+                stack[sp].mask = hmk[i];
+                stack[sp].dist = ANY ? 0.0f : hd[i];
+                sp++;
+            }
+            ref = hr[0];
+            m = hmk[0];
+        }
+        {
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *block = sc_leaf_block(bvh->leaves, ref);
+            const float *rows = sc_leaf_rows(block, W, sc_ref_has_spheres(ref));
+            const uint32_t *prims = sc_leaf_prims(rows, W);
+            uint32_t live = (1u << n) - 1;
+            if (STATS)
+                st->leaves++;
+            if (c->cone && sc_ref_has_spheres(ref)) {
+                uint32_t cull = PFN(pk_cone_cull)(c, block, W) & live;
+                if (STATS) {
+                    /* per ray, as the single-ray counters */
+                    const uint64_t rays = (uint64_t)__builtin_popcount(m);
+                    st->sphere_tests += n * rays;
+                    st->sphere_rejects += (uint64_t)__builtin_popcount(cull) * rays;
+                }
+                live &= ~cull;
+            }
+            const pvec o0 = PV(load)(c->org[0]), o1 = PV(load)(c->org[1]), o2 = PV(load)(c->org[2]);
+            const pvec Sx = PV(load)(c->Sx), Sy = PV(load)(c->Sy), Sz = PV(load)(c->Sz);
+            for (; live && m; live &= live - 1) {
+                const unsigned i = (unsigned)__builtin_ctz(live);
+                if (STATS)
+                    st->tri_tests += (uint64_t)__builtin_popcount(m);
+#define VTX(j, k) PV(set1)(rows[sc_leaf_at(W, (j), (k), i)])
+                pvec Akz, Bkz, Ckz, Ax, Ay, Bx, By, Cx, Cy;
+                if (UNI) {
+                    const int kx = c->kx, ky = c->ky, kz = c->kz;
+                    const pvec okx = PV(load)(c->org[kx]), oky = PV(load)(c->org[ky]), okz = PV(load)(c->org[kz]);
+                    Akz = PV(sub)(VTX(0, kz), okz);
+                    Bkz = PV(sub)(VTX(1, kz), okz);
+                    Ckz = PV(sub)(VTX(2, kz), okz);
+                    Ax = PV(sub)(PV(sub)(VTX(0, kx), okx), PV(mul)(Sx, Akz));
+                    Ay = PV(sub)(PV(sub)(VTX(0, ky), oky), PV(mul)(Sy, Akz));
+                    Bx = PV(sub)(PV(sub)(VTX(1, kx), okx), PV(mul)(Sx, Bkz));
+                    By = PV(sub)(PV(sub)(VTX(1, ky), oky), PV(mul)(Sy, Bkz));
+                    Cx = PV(sub)(PV(sub)(VTX(2, kx), okx), PV(mul)(Sx, Ckz));
+                    Cy = PV(sub)(PV(sub)(VTX(2, ky), oky), PV(mul)(Sy, Ckz));
+                } else {
+                    /* A[k] = v - o for every axis, then the lane's axes */
+                    pvec A0 = PV(sub)(VTX(0, 0), o0), A1 = PV(sub)(VTX(0, 1), o1), A2 = PV(sub)(VTX(0, 2), o2);
+                    pvec B0 = PV(sub)(VTX(1, 0), o0), B1 = PV(sub)(VTX(1, 1), o1), B2 = PV(sub)(VTX(1, 2), o2);
+                    pvec C0 = PV(sub)(VTX(2, 0), o0), C1 = PV(sub)(VTX(2, 1), o1), C2 = PV(sub)(VTX(2, 2), o2);
+                    Akz = PFN(pk_sel3)(c->kz1, c->kz2, A0, A1, A2);
+                    Bkz = PFN(pk_sel3)(c->kz1, c->kz2, B0, B1, B2);
+                    Ckz = PFN(pk_sel3)(c->kz1, c->kz2, C0, C1, C2);
+                    Ax = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, A0, A1, A2), PV(mul)(Sx, Akz));
+                    Ay = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, A0, A1, A2), PV(mul)(Sy, Akz));
+                    Bx = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, B0, B1, B2), PV(mul)(Sx, Bkz));
+                    By = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, B0, B1, B2), PV(mul)(Sy, Bkz));
+                    Cx = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, C0, C1, C2), PV(mul)(Sx, Ckz));
+                    Cy = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, C0, C1, C2), PV(mul)(Sy, Ckz));
+                }
+#undef VTX
+                const pvec U = PV(sub)(PV(mul)(Cx, By), PV(mul)(Cy, Bx));
+                const pvec V = PV(sub)(PV(mul)(Ax, Cy), PV(mul)(Ay, Cx));
+                const pvec Wv = PV(sub)(PV(mul)(Bx, Ay), PV(mul)(By, Ax));
+                const pvec zero = PV(set1)(0);
+                uint32_t neg = PV(bits)(PV(or)(PV(or)(PV(lt)(U, zero), PV(lt)(V, zero)), PV(lt)(Wv, zero)));
+                uint32_t pos = PV(bits)(PV(or)(PV(or)(PV(gt)(U, zero), PV(gt)(V, zero)), PV(gt)(Wv, zero)));
+                uint32_t zr = PV(bits)(PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero))) & m;
+                const pvec det = PV(add)(PV(add)(U, V), Wv);
+                uint32_t cand = ~(neg & pos) & ~PV(bits)(PV(eq)(det, zero)) & m & ~zr;
+                const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
+                uint32_t h = 0;
+                pvec tt = zero;
+                if (cand) {
+                    pvec T = PV(add)(PV(add)(PV(mul)(U, Az), PV(mul)(V, Bz)), PV(mul)(Wv, Cz));
+                    tt = PV(div)(T, det);
+                    h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, tmaxv))) & cand;
+                }
+                if (h) {
+                    if (STATS)
+                        st->tri_hits += (uint64_t)__builtin_popcount(h);
+                    if (ANY) {
+                        alive &= ~h;
+                        m &= ~h;
+                    } else {
+                        /* of equal t the smaller primitive id */
+                        uint32_t upd = h & PV(bits)(PV(lt)(tt, tmaxv));
+                        for (uint32_t e = h & ~upd; e; e &= e - 1) {
+                            unsigned l = (unsigned)__builtin_ctz(e);
+                            if (prims[i] < bprim[l])
+                                upd |= 1u << l;
+                        }
+                        const PV(m) um = PV(mask_from_bits)(upd);
+                        tmaxv = PV(sel)(um, tt, tmaxv);
+                        bun = PV(sel)(um, V, bun);
+                        bvn = PV(sel)(um, Wv, bvn);
+                        bden = PV(sel)(um, det, bden);
+                        for (uint32_t e = upd; e; e &= e - 1)
+                            bprim[__builtin_ctz(e)] = prims[i];
+                    }
+                }
+                if (__builtin_expect(zr != 0, 0)) {
+                    /* an exactly zero edge function: sc_watertight_double
+                     * per lane, as the single ray does */
+                    float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
+                    float tm[PK], un[PK], vn[PK], dn[PK];
+                    PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
+                    PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, Az), PV(store)(bz, Bz);
+                    PV(store)(cz, Cz), PV(store)(tm, tmaxv), PV(store)(un, bun), PV(store)(vn, bvn);
+                    PV(store)(dn, bden);
+                    for (uint32_t e = zr; e; e &= e - 1) {
+                        unsigned l = (unsigned)__builtin_ctz(e);
+                        float t, u, v;
+                        if (!sc_watertight_double(ax[l], ay[l], bx[l], by[l], cx[l], cy[l], az[l], bz[l],
+                                                  cz[l], c->tmin[l], tm[l], &t, &u, &v))
+                            continue;
+                        if (STATS)
+                            st->tri_hits++;
+                        if (ANY) {
+                            alive &= ~(1u << l);
+                            m &= ~(1u << l);
+                        } else if (t < tm[l] || prims[i] < bprim[l]) {
+                            tm[l] = t, un[l] = u, vn[l] = v, dn[l] = 1;
+                            bprim[l] = prims[i];
+                        }
+                    }
+                    tmaxv = PV(load)(tm), bun = PV(load)(un), bvn = PV(load)(vn), bden = PV(load)(dn);
+                }
+            }
+        }
+    pop:
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+            m = stack[sp].mask & alive;
+            if (!ANY && m)
+                m &= PV(bits)(PV(ge)(tmaxv, PV(set1)(stack[sp].dist)));
+        } while (!m);
+        ref = stack[sp].ref;
+    }
+done:
+    if (ANY) {
+        for (uint32_t e = lanes; e; e &= e - 1) {
+            unsigned l = (unsigned)__builtin_ctz(e);
+            occluded[l] = !((alive >> l) & 1);
+        }
+        return;
+    }
+    {
+        float tm[PK], u[PK], v[PK];
+        PV(store)(tm, tmaxv);
+        PV(store)(u, PV(div)(bun, bden));
+        PV(store)(v, PV(div)(bvn, bden));
+        for (uint32_t e = lanes; e; e &= e - 1) {
+            unsigned l = (unsigned)__builtin_ctz(e);
+            const int miss = bprim[l] == SC_HITREC_MISS;
+            hit->prim[l] = bprim[l];
+            hit->t[l] = miss ? r->tmax[l] : tm[l];
+            hit->u[l] = miss ? 0 : u[l];
+            hit->v[l] = miss ? 0 : v[l];
+        }
+    }
+}
+
+/* The packet entry points: lanes = the caller's valid lanes (rays already
+ * checked). Parallel rays leave the packet for the single-ray kernel. */
+static SC_TARGET void PFN(closest_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
+                                          sc_trace_stats *st)
+{
+    pk_ctx c;
+    uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
+    uint32_t pl = lanes & ~par;
+    if (pl) {
+        if (st)
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, st, 0, 1, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, st, 0, 1, 0);
+        else
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, NULL, 0, 0, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, NULL, 0, 0, 0);
+    }
+    for (uint32_t e = par; e; e &= e - 1) {
+        unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
+        sc_hitrec h;
+        if (st)
+            closest_stats_watertight(bvh, &ray, &h, st);
+        else
+            closest_watertight(bvh, &ray, &h);
+        hit->t[l] = h.t, hit->u[l] = h.u, hit->v[l] = h.v, hit->prim[l] = h.prim;
+    }
+}
+
+static SC_TARGET void PFN(any_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, int32_t *occluded,
+                                      sc_trace_stats *st)
+{
+    pk_ctx c;
+    uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
+    uint32_t pl = lanes & ~par;
+    if (pl) {
+        if (st)
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, st, 1, 1, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, st, 1, 1, 0);
+        else
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, NULL, 1, 0, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, NULL, 1, 0, 0);
+    }
+    for (uint32_t e = par; e; e &= e - 1) {
+        unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
+        occluded[l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
+    }
+}
+
+#undef pvec
+#undef pk_ctx
+#undef PCAT_
+#undef PCAT
+#undef PV
+#undef PGLUE_
+#undef PGLUE
+#undef PFN
+#undef PKT
+#undef HITP
+#undef PALL

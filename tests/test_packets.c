@@ -1,0 +1,482 @@
+/* Packets (sc_trace_closest8/16, sc_trace_any8/16) against the single-ray
+ * calls: every valid lane must return the single ray's hit bit for bit
+ * (t, u, v, prim) and the same occlusion, on every ISA level, prefilter
+ * mode, leaf size and triangle test, and invalid lanes must stay untouched.
+ *
+ * The packets are the hard cases for a packet tracer and for the
+ * circumsphere cone culling (which only runs on packets with one origin):
+ *   camera    one origin, a 4x4 (2x4) tile of directions around a target,
+ *             pixel sizes from 1e-5 to 1e-1 of the scene;
+ *   edges     one origin, every ray aimed at a vertex, an edge point or just
+ *             outside an edge of one triangle: grazing a narrow cone's
+ *             spheres exactly where the triangles meet;
+ *   far       a camera packet from 1e4 scene sizes away;
+ *   wide      one origin, directions over the whole sphere (no cone);
+ *   shadow    origins on the surface, all aimed at one light point;
+ *   mixed     unrelated rays (mixed octants and shear axes), random tmin,
+ *             tmax, and random valid masks.
+ * The single-ray answers are themselves checked against an exact oracle by
+ * test_bvh.c; here the claim is identity. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include "bvh_test_util.h"
+#include "spherecull/sc_bvh.h"
+#include "spherecull/sc_trace.h"
+
+#define NPACK 600   /* packets per kind and scene */
+
+enum { K_CAMERA, K_EDGES, K_FAR, K_WIDE, K_SHADOW, K_MIXED, K_COUNT };
+static const char *kind_name[K_COUNT] = { "camera", "edges", "far", "wide", "shadow", "mixed" };
+
+typedef struct packets {
+    sc_ray *rays;         /* NPACK * 16 per kind */
+    int32_t *valid;
+    size_t n;             /* rays */
+} packets;
+
+static void bounds(const tmesh *m, double lo[3], double hi[3])
+{
+    for (int k = 0; k < 3; k++)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (size_t i = 0; i < m->nv; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m->pos[3 * i + k]);
+            hi[k] = fmax(hi[k], m->pos[3 * i + k]);
+        }
+}
+
+static void vtx(const tmesh *m, size_t t, int j, double p[3])
+{
+    for (int k = 0; k < 3; k++)
+        p[k] = m->pos[3 * m->idx[3 * t + j] + k];
+}
+
+static void set_ray(sc_ray *r, const double o[3], const double d[3], float tmin, float tmax)
+{
+    for (int k = 0; k < 3; k++)
+        r->org[k] = (float)o[k], r->dir[k] = (float)d[k];
+    if (r->dir[0] == 0 && r->dir[1] == 0 && r->dir[2] == 0)
+        r->dir[2] = 1;
+    r->tmin = tmin, r->tmax = tmax;
+}
+
+/* A point of triangle t, or just outside it (out > 0). */
+static void tri_point(const tmesh *m, size_t t, double a, double b, double p[3])
+{
+    double v0[3], v1[3], v2[3];
+    vtx(m, t, 0, v0), vtx(m, t, 1, v1), vtx(m, t, 2, v2);
+    for (int k = 0; k < 3; k++)
+        p[k] = v0[k] + a * (v1[k] - v0[k]) + b * (v2[k] - v0[k]);
+}
+
+static void make_packets(const tmesh *m, int kind, uint64_t seed, packets *out)
+{
+    double lo[3], hi[3], c[3], ext = 0;
+    bounds(m, lo, hi);
+    for (int k = 0; k < 3; k++)
+        c[k] = 0.5 * (lo[k] + hi[k]), ext = fmax(ext, hi[k] - lo[k]);
+    sc_rng r;
+    sc_rng_seed(&r, seed);
+    out->n = (size_t)NPACK * 16;
+    out->rays = malloc(out->n * sizeof(sc_ray));
+    out->valid = malloc(out->n * sizeof(int32_t));
+    for (size_t p = 0; p < NPACK; p++) {
+        sc_ray *pr = &out->rays[16 * p];
+        double o[3], tgt[3], d[3];
+        size_t t = (size_t)(sc_rng_uniform(&r) * (double)m->nt);
+        double dist = kind == K_FAR ? 1e4 * ext : sc_rng_range(&r, 0.6, 3) * ext;
+        double z = sc_rng_range(&r, -1, 1), ph = sc_rng_range(&r, 0, 6.283185307179586), s = sqrt(1 - z * z);
+        tri_point(m, t, 0.3, 0.3, tgt);
+        for (int k = 0; k < 3; k++)
+            o[k] = tgt[k] + dist * (k == 0 ? s * cos(ph) : k == 1 ? s * sin(ph) : z);
+        /* tile axes perpendicular to the view direction */
+        double f[3] = { tgt[0] - o[0], tgt[1] - o[1], tgt[2] - o[2] }, up[3] = { 0, 0, 1 }, ux[3], uy[3];
+        if (fabs(f[2]) > 0.9 * sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]))
+            up[0] = 1, up[2] = 0;
+        ux[0] = f[1] * up[2] - f[2] * up[1], ux[1] = f[2] * up[0] - f[0] * up[2], ux[2] = f[0] * up[1] - f[1] * up[0];
+        uy[0] = f[1] * ux[2] - f[2] * ux[1], uy[1] = f[2] * ux[0] - f[0] * ux[2], uy[2] = f[0] * ux[1] - f[1] * ux[0];
+        double lx = sqrt(ux[0] * ux[0] + ux[1] * ux[1] + ux[2] * ux[2]),
+               ly = sqrt(uy[0] * uy[0] + uy[1] * uy[1] + uy[2] * uy[2]);
+        double pix = ext * exp(sc_rng_range(&r, log(1e-5), log(1e-1)));
+        double light[3];
+        for (int k = 0; k < 3; k++)
+            light[k] = c[k] + sc_rng_range(&r, -2, 2) * ext;
+        for (int i = 0; i < 16; i++) {
+            sc_ray *ray = &pr[i];
+            switch (kind) {
+            case K_CAMERA:
+            case K_FAR:
+                for (int k = 0; k < 3; k++)
+                    d[k] = f[k] + pix * ((i % 4 - 1.5) * ux[k] / lx + (i / 4 - 1.5) * uy[k] / ly);
+                set_ray(ray, o, d, 0, INFINITY);
+                break;
+            case K_EDGES: {
+                /* vertices, edge points and just outside the edges */
+                static const double ab[16][2] = { { 0, 0 }, { 1, 0 }, { 0, 1 }, { 0.5, 0 }, { 0, 0.5 },
+                                                  { 0.5, 0.5 }, { 1.0 / 3, 1.0 / 3 }, { 0.25, 0 },
+                                                  { -1e-7, 0.5 }, { 0.5, -1e-7 }, { 0.5000001, 0.5 },
+                                                  { 1.0000001, 0 }, { 0, 1.0000001 }, { -1e-7, -1e-7 },
+                                                  { 0.7, 0.3 }, { 0.3, 0.7 } };
+                tri_point(m, t, ab[i][0], ab[i][1], tgt);
+                for (int k = 0; k < 3; k++)
+                    d[k] = tgt[k] - o[k];
+                set_ray(ray, o, d, 0, INFINITY);
+                break;
+            }
+            case K_WIDE: {
+                double zz = sc_rng_range(&r, -1, 1), pp = sc_rng_range(&r, 0, 6.283185307179586),
+                       ss = sqrt(1 - zz * zz);
+                d[0] = ss * cos(pp), d[1] = ss * sin(pp), d[2] = zz;
+                set_ray(ray, c, d, 0, INFINITY);
+                break;
+            }
+            case K_SHADOW: {
+                size_t tt = (t + (size_t)i) % m->nt;
+                double a = sc_rng_uniform(&r), b = sc_rng_uniform(&r);
+                if (a + b > 1)
+                    a = 1 - a, b = 1 - b;
+                tri_point(m, tt, a, b, tgt);
+                for (int k = 0; k < 3; k++)
+                    d[k] = light[k] - tgt[k];
+                set_ray(ray, tgt, d, 1e-4f, 1.0f);
+                break;
+            }
+            default: {
+                double zz = sc_rng_range(&r, -1, 1), pp = sc_rng_range(&r, 0, 6.283185307179586),
+                       ss = sqrt(1 - zz * zz);
+                for (int k = 0; k < 3; k++)
+                    o[k] = c[k] + sc_rng_range(&r, -1, 1) * ext;
+                if (i % 2) {
+                    size_t tt = (size_t)(sc_rng_uniform(&r) * (double)m->nt);
+                    tri_point(m, tt, 0.2, 0.3, tgt);
+                    for (int k = 0; k < 3; k++)
+                        d[k] = tgt[k] - o[k];
+                } else {
+                    d[0] = ss * cos(pp), d[1] = ss * sin(pp), d[2] = zz;
+                }
+                float tmin = i % 3 == 0 ? (float)sc_rng_range(&r, 0, 0.8) : 0;
+                float tmax = i % 5 == 0 ? (float)sc_rng_range(&r, 0.2, 1.5) : INFINITY;
+                if (i == 7)                      /* a parallel ray: traced singly inside the packet */
+                    d[0] = 0;
+                set_ray(ray, o, d, tmin, tmax);
+            }
+            }
+            out->valid[16 * p + (size_t)i] = kind == K_MIXED ? sc_rng_uniform(&r) < 0.7 : 1;
+        }
+    }
+}
+
+static void to_packet16(const sc_ray *r, sc_ray_packet16 *p)
+{
+    for (int i = 0; i < 16; i++) {
+        p->ox[i] = r[i].org[0], p->oy[i] = r[i].org[1], p->oz[i] = r[i].org[2], p->tmin[i] = r[i].tmin;
+        p->dx[i] = r[i].dir[0], p->dy[i] = r[i].dir[1], p->dz[i] = r[i].dir[2], p->tmax[i] = r[i].tmax;
+    }
+}
+
+static void to_packet8(const sc_ray *r, sc_ray_packet8 *p)
+{
+    for (int i = 0; i < 8; i++) {
+        p->ox[i] = r[i].org[0], p->oy[i] = r[i].org[1], p->oz[i] = r[i].org[2], p->tmin[i] = r[i].tmin;
+        p->dx[i] = r[i].dir[0], p->dy[i] = r[i].dir[1], p->dz[i] = r[i].dir[2], p->tmax[i] = r[i].tmax;
+    }
+}
+
+static int same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* Packets of 16 and of 8 (each 16 split in two) against single rays.
+ * Returns the number of lanes that differ; adds the statistics. */
+static size_t check(const sc_bvh *b, const packets *pk, sc_trace_stats *st)
+{
+    size_t bad = 0;
+    sc_ray_packet16 *p16 = aligned_alloc(64, sizeof *p16);
+    sc_ray_packet8 *p8 = aligned_alloc(64, sizeof *p8);
+    sc_hit_packet16 *h16 = aligned_alloc(64, sizeof *h16);
+    sc_hit_packet8 *h8 = aligned_alloc(64, sizeof *h8);
+    for (size_t p = 0; p < pk->n / 16; p++) {
+        const sc_ray *r = &pk->rays[16 * p];
+        const int32_t *valid = &pk->valid[16 * p];
+        sc_hitrec ref[16];
+        int occ_ref[16];
+        for (int i = 0; i < 16; i++) {
+            assert_int_equal(sc_trace_closest(b, &r[i], &ref[i], NULL), SC_OK);
+            assert_int_equal(sc_trace_any(b, &r[i], &occ_ref[i], NULL), SC_OK);
+        }
+        to_packet16(r, p16);
+        memset(h16, 0x5a, sizeof *h16);
+        assert_int_equal(sc_trace_closest16(b, valid, p16, h16, st), SC_OK);
+        int32_t occ[16];
+        memset(occ, 0x5a, sizeof occ);
+        assert_int_equal(sc_trace_any16(b, valid, p16, occ, NULL), SC_OK);
+        for (int i = 0; i < 16; i++) {
+            if (!valid[i]) {
+                bad += h16->prim[i] != 0x5a5a5a5au || occ[i] != 0x5a5a5a5a;
+                continue;
+            }
+            int ok = h16->prim[i] == ref[i].prim && same_bits(h16->t[i], ref[i].t) &&
+                     same_bits(h16->u[i], ref[i].u) && same_bits(h16->v[i], ref[i].v) && occ[i] == occ_ref[i];
+            if (!ok && bad < 5)
+                print_message("lane %d: packet prim %u t %a occ %d, single prim %u t %a occ %d\n", i,
+                              h16->prim[i], (double)h16->t[i], occ[i], ref[i].prim, (double)ref[i].t, occ_ref[i]);
+            bad += !ok;
+        }
+        for (int half = 0; half < 2; half++) {
+            to_packet8(r + 8 * half, p8);
+            memset(h8, 0x5a, sizeof *h8);
+            assert_int_equal(sc_trace_closest8(b, valid + 8 * half, p8, h8, NULL), SC_OK);
+            memset(occ, 0x5a, sizeof occ);
+            assert_int_equal(sc_trace_any8(b, valid + 8 * half, p8, occ, NULL), SC_OK);
+            for (int i = 0; i < 8; i++) {
+                int j = 8 * half + i;
+                if (!valid[j]) {
+                    bad += h8->prim[i] != 0x5a5a5a5au || occ[i] != 0x5a5a5a5a;
+                    continue;
+                }
+                bad += !(h8->prim[i] == ref[j].prim && same_bits(h8->t[i], ref[j].t) &&
+                         same_bits(h8->u[i], ref[j].u) && same_bits(h8->v[i], ref[j].v) && occ[i] == occ_ref[j]);
+            }
+        }
+    }
+    free(p16), free(p8), free(h16), free(h8);
+    return bad;
+}
+
+static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, sc_tri_test tt)
+{
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.leaf_size = leaf;
+    cfg.prefilter = mode;
+    cfg.tri_test = tt;
+    sc_bvh *bvh = NULL;
+    assert_int_equal(sc_bvh_build(m->pos, m->nv, m->idx, m->nt, &cfg, &bvh), SC_OK);
+    return bvh;
+}
+
+/* Every kind, ISA level, prefilter mode and leaf size, watertight test. */
+static void run_scene(const char *name, const tmesh *m, const int *leaves, int nleaves)
+{
+    packets pk[K_COUNT];
+    for (int k = 0; k < K_COUNT; k++)
+        make_packets(m, k, 100 + (uint64_t)k, &pk[k]);
+    uint64_t culled_camera = 0;
+    const sc_isa start = sc_isa_active();
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        for (int li = 0; li < nleaves; li++)
+            for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode++) {
+                sc_bvh *b = build(m, leaves[li], (sc_prefilter_mode)mode, SC_TRI_WATERTIGHT);
+                for (int k = 0; k < K_COUNT; k++) {
+                    sc_trace_stats st;
+                    memset(&st, 0, sizeof st);
+                    size_t bad = check(b, &pk[k], &st);
+                    if (bad)
+                        print_message("%s %s leaf %d %s %s: %zu lanes differ\n", name, kind_name[k], leaves[li],
+                                      sc_prefilter_mode_name((sc_prefilter_mode)mode), sc_isa_name((sc_isa)isa),
+                                      bad);
+                    assert_int_equal(bad, 0);
+                    if (k == K_CAMERA && isa == SC_ISA_AVX512 && mode == SC_PREFILTER_CIRCUM)
+                        culled_camera += st.sphere_rejects;
+                }
+                sc_bvh_free(b);
+            }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    /* the cone culls something on camera packets (else this test would not
+     * exercise it) */
+    if (sc_isa_supported(SC_ISA_AVX512))
+        assert_true(culled_camera > 0);
+    for (int k = 0; k < K_COUNT; k++)
+        free(pk[k].rays), free(pk[k].valid);
+}
+
+static void test_icosphere(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0.1, -0.2, 0.3 };
+    scene_icosphere(&m, 3, 1.0, c);
+    const int leaves[] = { 1, 4, 8, 16 };
+    run_scene("icosphere", &m, leaves, 4);
+    tmesh_free(&m);
+}
+
+static void test_soup_slivers(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    scene_soup(&m, 1500, 0, 5);
+    scene_slivers(&m, 800, 6);
+    const int leaves[] = { 4, 16 };
+    run_scene("soup", &m, leaves, 2);
+    tmesh_free(&m);
+}
+
+/* The other triangle tests run lane by lane: still the single answers. */
+static void test_other_tests(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 2, 1.0, c);
+    packets pk;
+    make_packets(&m, K_EDGES, 7, &pk);
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
+        sc_bvh *b = build(&m, 4, SC_PREFILTER_CIRCUM, (sc_tri_test)tt);
+        assert_int_equal(check(b, &pk, NULL), 0);
+        sc_bvh_free(b);
+    }
+    free(pk.rays), free(pk.valid);
+    tmesh_free(&m);
+}
+
+static void test_api(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 1, 1.0, c);
+    sc_bvh *b = build(&m, 4, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT);
+    unsigned char *mem = aligned_alloc(64, 4096);
+    sc_ray_packet16 *p16 = (sc_ray_packet16 *)(void *)mem;
+    sc_hit_packet16 *h16 = (sc_hit_packet16 *)(void *)(mem + 1024);
+    memset(mem, 0, 4096);
+    int32_t valid[16], occ[16];
+    for (int i = 0; i < 16; i++) {
+        valid[i] = -1;
+        p16->oz[i] = -5, p16->dz[i] = 1, p16->tmax[i] = INFINITY;
+    }
+    assert_int_equal(sc_trace_closest16(b, valid, p16, h16, NULL), SC_OK);
+    for (int i = 0; i < 16; i++)
+        assert_true(h16->prim[i] != SC_HITREC_MISS);
+    assert_int_equal(sc_trace_closest16(NULL, valid, p16, h16, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest16(b, NULL, p16, h16, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_any16(b, valid, p16, NULL, NULL), SC_ERR_INVALID_ARGUMENT);
+    /* misaligned packets and hits */
+    assert_int_equal(sc_trace_closest16(b, valid, (const sc_ray_packet16 *)(const void *)(mem + 32), h16, NULL),
+                     SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest16(b, valid, p16, (sc_hit_packet16 *)(void *)(mem + 1024 + 32), NULL),
+                     SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest8(b, valid, (const sc_ray_packet8 *)(const void *)(mem + 16),
+                                       (sc_hit_packet8 *)(void *)(mem + 1024), NULL),
+                     SC_ERR_INVALID_ARGUMENT);
+    /* a refused ray in a valid lane: an error and nothing written */
+    p16->dx[3] = NAN;
+    memset(h16, 0x5a, sizeof *h16);
+    assert_int_equal(sc_trace_closest16(b, valid, p16, h16, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(h16->prim[0], 0x5a5a5a5au);
+    memset(occ, 0x5a, sizeof occ);
+    assert_int_equal(sc_trace_any16(b, valid, p16, occ, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(occ[0], 0x5a5a5a5a);
+    /* ... but in an invalid lane it is never read */
+    valid[3] = 0;
+    assert_int_equal(sc_trace_closest16(b, valid, p16, h16, NULL), SC_OK);
+    assert_int_equal(h16->prim[3], 0x5a5a5a5au);
+    assert_int_equal(sc_trace_any16(b, valid, p16, occ, NULL), SC_OK);
+    assert_int_equal(occ[0], 1);
+    assert_int_equal(occ[3], 0x5a5a5a5a);
+    free(mem);
+    sc_bvh_free(b);
+    tmesh_free(&m);
+}
+
+/* Streams: byte strides, coherent runs (camera packets) and incoherent ones
+ * (mixed) in one call, a tail shorter than 16, a refused ray: every other
+ * ray still gets its single-ray answer. */
+typedef struct padded_ray {
+    sc_ray r;
+    float pad[3];
+} padded_ray;
+typedef struct padded_hit {
+    sc_hitrec h;
+    int32_t occ, pad;
+} padded_hit;
+
+static void test_streams(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 3, 1.0, c);
+    packets a, b;
+    make_packets(&m, K_CAMERA, 21, &a);
+    make_packets(&m, K_MIXED, 22, &b);
+    const size_t n = a.n + b.n - 5;
+    padded_ray *r = malloc(n * sizeof *r);
+    padded_hit *h = malloc(n * sizeof *h);
+    for (size_t i = 0; i < n; i++) {
+        /* alternate 16 camera rays and 16 mixed ones */
+        size_t blk = i / 16, j = (blk / 2) * 16 + i % 16;
+        r[i].r = (blk & 1) ? b.rays[j % b.n] : a.rays[j % a.n];
+    }
+    sc_bvh *bvh = build(&m, 4, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT);
+    for (int flags = 0; flags < 2; flags++) {
+        memset(h, 0x5a, n * sizeof *h);
+        assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n,
+                                            flags ? SC_TRACE_INCOHERENT : 0, NULL),
+                         SC_OK);
+        assert_int_equal(sc_trace_any_n(bvh, &r[0].r, sizeof *r, &h[0].occ, sizeof *h, n,
+                                        flags ? SC_TRACE_INCOHERENT : 0, NULL),
+                         SC_OK);
+        size_t bad = 0;
+        for (size_t i = 0; i < n; i++) {
+            sc_hitrec ref;
+            int occ;
+            assert_int_equal(sc_trace_closest(bvh, &r[i].r, &ref, NULL), SC_OK);
+            assert_int_equal(sc_trace_any(bvh, &r[i].r, &occ, NULL), SC_OK);
+            bad += !(h[i].h.prim == ref.prim && same_bits(h[i].h.t, ref.t) && same_bits(h[i].h.u, ref.u) &&
+                     same_bits(h[i].h.v, ref.v) && h[i].occ == occ);
+        }
+        assert_int_equal(bad, 0);
+    }
+    /* a refused ray: an error, no answer for it, the rest answered */
+    r[20].r.dir[1] = NAN;
+    memset(h, 0x5a, n * sizeof *h);
+    assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n, 0, NULL),
+                     SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(h[20].h.prim, 0x5a5a5a5au);
+    sc_hitrec ref;
+    assert_int_equal(sc_trace_closest(bvh, &r[21].r, &ref, NULL), SC_OK);
+    assert_int_equal(h[21].h.prim, ref.prim);
+    assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, 8, &h[0].h, sizeof *h, n, 0, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n, 4, NULL),
+                     SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_free(bvh);
+    free(r), free(h);
+    free(a.rays), free(a.valid), free(b.rays), free(b.valid);
+    tmesh_free(&m);
+}
+
+static void test_bunny(void **state)
+{
+    (void)state;
+    const char *dir = getenv("SC_TEST_SCENES");
+    char path[4096];
+    tmesh m = { 0 };
+    snprintf(path, sizeof path, "%s/bunny.obj", dir ? dir : ".");
+    if (!dir || tmesh_read_obj(&m, path) != 0) {
+        print_message("bunny.obj not found: skipped\n");
+        skip();
+    }
+    const int leaves[] = { 4 };
+    run_scene("bunny", &m, leaves, 1);
+    tmesh_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_api),
+        cmocka_unit_test(test_other_tests),
+        cmocka_unit_test(test_streams),
+        cmocka_unit_test(test_icosphere),
+        cmocka_unit_test(test_soup_slivers),
+        cmocka_unit_test(test_bunny),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
