@@ -6,6 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 #include "common/sc_clock.h"
 #include "spherecull/sc_trace.h"
 #include "tracer.h"
@@ -153,6 +157,30 @@ void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c)
 /* Rays [base, base + W) as a packet (the tail padded with invalid lanes). */
 static void fill_packet(const sc_ray *rays, size_t n, size_t base, unsigned W, float *soa, int32_t *valid)
 {
+    if (base + W <= n) {
+        /* a full packet: a transpose of W rays of 8 floats, 4x4 blocks */
+        const float *src = (const float *)(const void *)(rays + base);
+#if defined(__SSE__)
+        for (unsigned i = 0; i < W; i += 4) {
+            for (unsigned h = 0; h < 8; h += 4) {
+                __m128 r0 = _mm_loadu_ps(src + 8 * i + h), r1 = _mm_loadu_ps(src + 8 * (i + 1) + h);
+                __m128 r2 = _mm_loadu_ps(src + 8 * (i + 2) + h), r3 = _mm_loadu_ps(src + 8 * (i + 3) + h);
+                _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+                _mm_storeu_ps(soa + (h + 0) * W + i, r0);
+                _mm_storeu_ps(soa + (h + 1) * W + i, r1);
+                _mm_storeu_ps(soa + (h + 2) * W + i, r2);
+                _mm_storeu_ps(soa + (h + 3) * W + i, r3);
+            }
+        }
+#else
+        for (unsigned f = 0; f < 8; f++)
+            for (unsigned i = 0; i < W; i++)
+                soa[f * W + i] = src[8 * i + f];
+#endif
+        for (unsigned i = 0; i < W; i++)
+            valid[i] = 1;
+        return;
+    }
     for (unsigned i = 0; i < W; i++) {
         size_t k = base + i;
         const sc_ray *r = &rays[k < n ? k : n - 1];

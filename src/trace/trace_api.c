@@ -2,6 +2,10 @@
  * active ISA level (src/isa) for the BVH's triangle test. A NULL stats
  * pointer selects the kernel compiled without counters. */
 #include <float.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "bvh/bvh_internal.h"
 #include "isa/isa_dispatch.h"
@@ -35,22 +39,41 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
 #define SC_RAY_OF(r, i) { { (r)->ox[i], (r)->oy[i], (r)->oz[i] }, (r)->tmin[i], { (r)->dx[i], (r)->dy[i], (r)->dz[i] }, (r)->tmax[i] }
 
 /* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
- * conditions of sc_ray_valid, branch-free over the rows so that they
- * vectorise (isfinite(d) as |d| <= FLT_MAX, which NaN fails). */
+ * conditions of sc_ray_valid four lanes at a time (SSE2, the x86-64
+ * baseline): isfinite(d) as |d| <= FLT_MAX, which NaN fails. */
 static int64_t packet_lanes(const int32_t *valid, const float *ox, const float *oy, const float *oz,
                             const float *tmin, const float *dx, const float *dy, const float *dz,
                             const float *tmax, unsigned K)
 {
     uint32_t lanes = 0, bad = 0;
+#if defined(__SSE2__)
+    const __m128 sgn = _mm_set1_ps(-0.0f), omax = _mm_set1_ps(SC_MAX_ORIGIN), fmax = _mm_set1_ps(FLT_MAX),
+                 zero = _mm_setzero_ps();
+    for (unsigned i = 0; i < K; i += 4) {
+#define ABS(p) _mm_andnot_ps(sgn, _mm_loadu_ps((p) + i))
+        __m128 ok = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(ABS(ox), omax), _mm_cmplt_ps(ABS(oy), omax)),
+                               _mm_cmplt_ps(ABS(oz), omax));
+        ok = _mm_and_ps(ok, _mm_and_ps(_mm_and_ps(_mm_cmple_ps(ABS(dx), fmax), _mm_cmple_ps(ABS(dy), fmax)),
+                                       _mm_cmple_ps(ABS(dz), fmax)));
+        __m128 nz = _mm_or_ps(_mm_or_ps(_mm_cmpneq_ps(_mm_loadu_ps(dx + i), zero),
+                                        _mm_cmpneq_ps(_mm_loadu_ps(dy + i), zero)),
+                              _mm_cmpneq_ps(_mm_loadu_ps(dz + i), zero));
+        ok = _mm_and_ps(_mm_and_ps(ok, nz), _mm_cmpge_ps(_mm_loadu_ps(tmin + i), zero));
+        ok = _mm_and_ps(ok, _mm_cmpord_ps(_mm_loadu_ps(tmax + i), _mm_loadu_ps(tmax + i)));
+#undef ABS
+        __m128i v = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(const void *)(valid + i)), _mm_setzero_si128());
+        uint32_t vm = (uint32_t)_mm_movemask_ps(_mm_castsi128_ps(v)) ^ 15u;
+        lanes |= vm << i;
+        bad |= (vm & ~(uint32_t)_mm_movemask_ps(ok)) << i;
+    }
+#else
     for (unsigned i = 0; i < K; i++) {
-        const int ok = (fabsf(ox[i]) < SC_MAX_ORIGIN) & (fabsf(oy[i]) < SC_MAX_ORIGIN) &
-                       (fabsf(oz[i]) < SC_MAX_ORIGIN) & (fabsf(dx[i]) <= FLT_MAX) & (fabsf(dy[i]) <= FLT_MAX) &
-                       (fabsf(dz[i]) <= FLT_MAX) & ((dx[i] != 0) | (dy[i] != 0) | (dz[i] != 0)) &
-                       (tmin[i] >= 0) & (tmax[i] == tmax[i]);
+        const sc_ray r = { { ox[i], oy[i], oz[i] }, tmin[i], { dx[i], dy[i], dz[i] }, tmax[i] };
         const uint32_t v = valid[i] != 0;
         lanes |= v << i;
-        bad |= (v & (uint32_t)!ok) << i;
+        bad |= (v & (uint32_t)!sc_ray_valid(&r)) << i;
     }
+#endif
     return bad ? (int64_t)-1 : (int64_t)lanes;
 }
 #define PACKET_LANES(valid, r, K)                                                                    \
@@ -203,27 +226,65 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 
 /* ---- streams ---------------------------------------------------------------
  * Runs of 16 rays that look coherent go as a packet, the rest one by one.
- * Coherent: the unit directions of the run (its valid rays) lie in a box of
- * side <= SC_STREAM_SPREAD per axis, about 11 degrees: camera tiles and
- * shadow rays of a tile to one light pass, diffuse and random rays do not. */
+ * Coherent: one direction octant (sign bits, checked first: it fails early
+ * and cheaply for diffuse and random rays), and directions scaled to unit
+ * L1 length within SC_STREAM_SPREAD of each other per axis (about 10
+ * degrees): camera tiles and shadow rays of a tile to one light pass. */
 #define SC_STREAM_SPREAD 0.2f
 
-static int run_coherent(const sc_ray *const *r, unsigned k)
+static int run_one_octant(const sc_ray *const *r, unsigned k)
 {
-    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    uint32_t any = 0, all = 7;
     for (unsigned i = 0; i < k; i++) {
-        const float *d = r[i]->dir;
-        float l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        if (!(l > 0))
+        uint32_t b[3];
+        for (int a = 0; a < 3; a++)
+            memcpy(&b[a], &r[i]->dir[a], sizeof b[a]);
+        uint32_t sg = (b[0] >> 31) | (b[1] >> 31) << 1 | (b[2] >> 31) << 2;
+        any |= sg, all &= sg;
+        if (any != all)
             return 0;
+    }
+    return 1;
+}
+
+static int packet_narrow(const sc_ray_packet16 *p)
+{
+#if defined(__SSE2__)
+    const __m128 sgn = _mm_set1_ps(-0.0f), one = _mm_set1_ps(1.0f);
+    __m128 lo[3], hi[3];
+    for (unsigned i = 0; i < 16; i += 4) {
+        const __m128 d[3] = { _mm_load_ps(p->dx + i), _mm_load_ps(p->dy + i), _mm_load_ps(p->dz + i) };
+        const __m128 inv = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sgn, d[0]), _mm_andnot_ps(sgn, d[1])),
+                                                     _mm_andnot_ps(sgn, d[2])));
         for (int a = 0; a < 3; a++) {
-            float u = d[a] / l;
-            lo[a] = u < lo[a] ? u : lo[a];
-            hi[a] = u > hi[a] ? u : hi[a];
+            const __m128 u = _mm_mul_ps(d[a], inv);
+            lo[a] = i ? _mm_min_ps(lo[a], u) : u;
+            hi[a] = i ? _mm_max_ps(hi[a], u) : u;
+        }
+    }
+    int ok = 1;
+    for (int a = 0; a < 3; a++) {
+        float l[4], h[4];
+        _mm_storeu_ps(l, lo[a]), _mm_storeu_ps(h, hi[a]);
+        float mn = l[0], mx = h[0];
+        for (int j = 1; j < 4; j++)
+            mn = l[j] < mn ? l[j] : mn, mx = h[j] > mx ? h[j] : mx;
+        ok &= mx - mn <= SC_STREAM_SPREAD;
+    }
+    return ok;
+#else
+    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (unsigned i = 0; i < 16; i++) {
+        float inv = 1 / (fabsf(p->dx[i]) + fabsf(p->dy[i]) + fabsf(p->dz[i]));
+        float u[3] = { p->dx[i] * inv, p->dy[i] * inv, p->dz[i] * inv };
+        for (int a = 0; a < 3; a++) {
+            lo[a] = u[a] < lo[a] ? u[a] : lo[a];
+            hi[a] = u[a] > hi[a] ? u[a] : hi[a];
         }
     }
     return hi[0] - lo[0] <= SC_STREAM_SPREAD && hi[1] - lo[1] <= SC_STREAM_SPREAD &&
            hi[2] - lo[2] <= SC_STREAM_SPREAD;
+#endif
 }
 
 static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
@@ -241,35 +302,37 @@ static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride
         for (unsigned i = 0; i < cnt; i++)
             run[i] = (const sc_ray *)(const void *)((const char *)rays + (base + i) * ray_stride);
         char *o0 = (char *)out + base * out_stride;
-        if (packets && cnt > 1 && run_coherent(run, cnt)) {
+        if (packets && cnt > 1 && run_one_octant(run, cnt)) {
             sc_ray_packet16 p __attribute__((aligned(64)));
             int32_t valid[16];
             for (unsigned i = 0; i < 16; i++) {
                 const sc_ray *r = run[i < cnt ? i : cnt - 1];
-                valid[i] = i < cnt && sc_ray_valid(r);
                 p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
                 p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
             }
-            if (any) {
-                int32_t occ[16];
-                sc_trace_any16(bvh, valid, &p, occ, stats);
-                for (unsigned i = 0; i < cnt; i++)
-                    if (valid[i])
-                        *(int32_t *)(void *)(o0 + i * out_stride) = occ[i];
-            } else {
-                sc_hit_packet16 h __attribute__((aligned(64)));
-                sc_trace_closest16(bvh, valid, &p, &h, stats);
-                for (unsigned i = 0; i < cnt; i++) {
-                    if (!valid[i])
+            for (unsigned i = 0; i < 16; i++)
+                valid[i] = i < cnt;
+            /* a run with a refused ray falls through to the rays one by one,
+             * which answer the others */
+            if (packet_narrow(&p)) {
+                if (any) {
+                    int32_t occ[16];
+                    if (sc_trace_any16(bvh, valid, &p, occ, stats) == SC_OK) {
+                        for (unsigned i = 0; i < cnt; i++)
+                            *(int32_t *)(void *)(o0 + i * out_stride) = occ[i];
                         continue;
-                    sc_hitrec *o = (sc_hitrec *)(void *)(o0 + i * out_stride);
-                    o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
+                    }
+                } else {
+                    sc_hit_packet16 h __attribute__((aligned(64)));
+                    if (sc_trace_closest16(bvh, valid, &p, &h, stats) == SC_OK) {
+                        for (unsigned i = 0; i < cnt; i++) {
+                            sc_hitrec *o = (sc_hitrec *)(void *)(o0 + i * out_stride);
+                            o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
+                        }
+                        continue;
+                    }
                 }
             }
-            for (unsigned i = 0; i < cnt; i++)
-                if (!valid[i])
-                    status = SC_ERR_INVALID_ARGUMENT;
-            continue;
         }
         for (unsigned i = 0; i < cnt; i++) {
             sc_status st;

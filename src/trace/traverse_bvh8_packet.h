@@ -56,6 +56,10 @@ typedef struct {
     uint32_t kx1, kx2, ky1, ky2, kz1, kz2;   /* lanes whose shear axis kx (ky, kz) is 1 or 2 */
     int uniform;                  /* every traced lane has the same octant and shear axes */
     int kx, ky, kz, oct;          /* those, when uniform */
+    /* the frustum of a uniform packet, per axis: extreme reciprocals and
+     * padded offsets over the traced lanes (pk_frustum_node) */
+    float fr_rdmin[3], fr_rdmax[3], fr_onmax[3], fr_ofmin[3], fr_tmin;
+    int frustum;                  /* uniform and one origin: pk_frustum_node culls first */
     int cone;                     /* every traced lane has the same origin: the cone below */
     float apex[3], axis[3], cos_t, sin_t;
 } PFN(pk_ctx);
@@ -133,6 +137,7 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     const uint32_t tl = lanes & ~par;
     c->uniform = 1;
     c->cone = 0;
+    c->frustum = 0;
     if (!tl)
         return par;
     for (int k = 0; k < 3; k++) {
@@ -148,6 +153,15 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
         PV(store)(c->ordf[k], PV(sub)(ord, pad));
         PV(store)(c->org[k], o[k]);
         c->neg[k] = PV(bits)(PV(lt)(d[k], PV(set1)(0))) & tl;
+        {
+            const PV(m) tm = PV(mask_from_bits)(tl);
+            const pvec pinf = PV(set1)(INFINITY), ninf = PV(set1)(-INFINITY);
+            c->fr_rdmin[k] = PV(hmin)(PV(sel)(tm, rd, pinf));
+            c->fr_rdmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), rd), pinf));
+            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), PV(add)(ord, pad)), pinf));
+            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, PV(sub)(ord, pad), pinf));
+            (void)ninf;
+        }
         if (c->neg[k] != 0 && c->neg[k] != tl)
             c->uniform = 0;
     }
@@ -172,6 +186,7 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     PV(store)(c->Sz, PV(div)(one, dkz));
     PV(store)(c->tmin, tmin);
     PV(store)(c->tmax, tmax);
+    c->fr_tmin = PV(hmin)(PV(sel)(PV(mask_from_bits)(tl), tmin, PV(set1)(INFINITY)));
     for (uint32_t *mk = &c->kx1; mk <= &c->kz2; mk++)
         if (*mk != 0 && *mk != tl)
             c->uniform = 0;
@@ -180,15 +195,14 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     c->kx = c->kx1 & first ? 1 : c->kx2 & first ? 2 : 0;
     c->ky = c->ky1 & first ? 1 : c->ky2 & first ? 2 : 0;
     c->kz = c->kz1 & first ? 1 : c->kz2 & first ? 2 : 0;
-    if (cone && __builtin_popcount(tl) > 1) {
-        /* one origin: every traced lane's bits equal the first's */
-        const unsigned ff = (unsigned)__builtin_ctz(tl);
-        uint32_t same = tl;
-        for (int k = 0; k < 3; k++)
-            same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
-        if (same == tl)
-            c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
-    }
+    /* one origin: every traced lane's bits equal the first's */
+    const unsigned ff = (unsigned)__builtin_ctz(tl);
+    uint32_t same = tl;
+    for (int k = 0; k < 3; k++)
+        same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
+    c->frustum = c->uniform && same == tl;
+    if (cone && same == tl && __builtin_popcount(tl) > 1)
+        c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
     return par;
 }
 
@@ -237,6 +251,38 @@ typedef struct {
     float dist;
 } PFN(pk_entry);
 
+/* The node test of a uniform packet (every lane in one octant): one 8-wide
+ * test of the node's children against the packet's frustum instead of one
+ * per child against every lane. For a plane x, min_i fl(x rd_i - b_i) >=
+ * fl(x r - b_max) with r = the smallest rd_i for x >= 0 and the largest for
+ * x < 0 (the sign bit picks, as blendv does), since rounding is monotone:
+ * the frustum's near distance is never above any lane's, its far distance
+ * never below (b_min, the other r). A child that any lane's own test
+ * (node_bvh8_slab.h) passes therefore passes here; dist gets the near
+ * bound, a lower bound of every lane's entry distance. */
+SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 *node, int nr0, int nr1,
+                                            int nr2, int fr0, int fr1, int fr2, float tmax_hi, float *dist)
+{
+#define FNEAR(row, k)                                                                              \
+    _mm256_fmsub_ps(_mm256_load_ps(node->b[row]),                                               \
+                    _mm256_blendv_ps(_mm256_set1_ps(c->fr_rdmin[k]), _mm256_set1_ps(c->fr_rdmax[k]), \
+                                     _mm256_load_ps(node->b[row])),                             \
+                    _mm256_set1_ps(c->fr_onmax[k]))
+#define FFAR(row, k)                                                                               \
+    _mm256_fmsub_ps(_mm256_load_ps(node->b[row]),                                               \
+                    _mm256_blendv_ps(_mm256_set1_ps(c->fr_rdmax[k]), _mm256_set1_ps(c->fr_rdmin[k]), \
+                                     _mm256_load_ps(node->b[row])),                             \
+                    _mm256_set1_ps(c->fr_ofmin[k]))
+    __m256 tn = _mm256_max_ps(_mm256_max_ps(FNEAR(nr0, 0), FNEAR(nr1, 1)),
+                              _mm256_max_ps(FNEAR(nr2, 2), _mm256_set1_ps(c->fr_tmin)));
+    __m256 tf = _mm256_min_ps(_mm256_min_ps(FFAR(fr0, 0), FFAR(fr1, 1)),
+                              _mm256_min_ps(FFAR(fr2, 2), _mm256_set1_ps(tmax_hi)));
+#undef FNEAR
+#undef FFAR
+    _mm256_store_ps(dist, tn);
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
+}
+
 /* The traversal. UNI = 1: every lane has the packet's octant and shear axes
  * (the near planes and the sheared axes are the same rows for all lanes). */
 SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
@@ -249,6 +295,8 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
     const pvec tminv = PV(load)(c->tmin);
     const pvec inf = PV(set1)(INFINITY);
     pvec tmaxv = PV(load)(c->tmax);
+    /* the largest tmax of the traced lanes: the frustum's far bound */
+    float tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
     /* the best hit so far per lane (closest): its t is tmaxv */
     pvec bun = PV(set1)(0), bvn = PV(set1)(0), bden = PV(set1)(1);
     uint32_t bprim[PK] __attribute__((aligned(64)));
@@ -275,12 +323,22 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
             if (STATS)
                 st->nodes++;
+            /* children to test lane by lane: with one origin, those the
+             * packet's frustum keeps (one 8-wide test culls the rest) */
+            unsigned cand = 0xff;
+            if (UNI && c->frustum) {
+                float fdist[SC_BVH_N] __attribute__((aligned(32)));
+                cand = PFN(pk_frustum_node)(c, node, nr0, nr1, nr2, fr0, fr1, fr2, tmax_hi, fdist);
+                if (!cand)
+                    goto pop;
+            }
             uint64_t hr[SC_BVH_N];
             uint32_t hmk[SC_BVH_N];
             float hd[SC_BVH_N];
             pvec htn[SC_BVH_N];
             int cnt = 0;
-            for (int k = 0; k < SC_BVH_N; k++) {
+            for (; cand; cand &= cand - 1) {
+                const int k = __builtin_ctz(cand);
                 if (!node->child[k])
                     continue;
                 pvec nx, ny, nz, fx, fy, fz;
@@ -289,6 +347,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     ny = PV(set1)(node->b[nr1][k]), fy = PV(set1)(node->b[fr1][k]);
                     nz = PV(set1)(node->b[nr2][k]), fz = PV(set1)(node->b[fr2][k]);
                 } else {
+                    /* lanes of every octant: near and far planes per lane */
                     pvec lx = PV(set1)(node->b[0][k]), hx = PV(set1)(node->b[1][k]);
                     pvec ly = PV(set1)(node->b[2][k]), hy = PV(set1)(node->b[3][k]);
                     pvec lz = PV(set1)(node->b[4][k]), hz = PV(set1)(node->b[5][k]);
@@ -463,6 +522,8 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     tmaxv = PV(load)(tm), bun = PV(load)(un), bvn = PV(load)(vn), bden = PV(load)(dn);
                 }
             }
+            if (UNI && !ANY && c->frustum)
+                tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
         }
     pop:
         do {
