@@ -112,6 +112,14 @@ sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_
  * last group partly valid), marked coherent. width is 8 or 16. */
 sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
                                       sc_hitrec *hits, sc_embree_counters *counters);
+/* rtcIntersect1M / rtcOccluded1M (Embree's streams) over the rays in chunks
+ * of 256, with RTC_INTERSECT_CONTEXT_FLAG_COHERENT (coherent != 0) or
+ * _INCOHERENT. */
+sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent,
+                                     sc_embree_counters *counters);
+sc_status sc_embree_occluded_stream(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded, int coherent,
+                                    sc_embree_counters *counters);
+
 /* rtcOccluded8 / rtcOccluded16 likewise. */
 sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
                                      sc_embree_counters *counters);

@@ -326,6 +326,8 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
         const sc_tracer *t = &r->tr[ti];
         sc_tracer_counters ctr;
         memset(&ctr, 0, sizeof ctr);
+        /* Embree's stream gets its coherence flag from the ray set */
+        r->tr[ti].incoherent = k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM;
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
         if (st != SC_OK) {
             if (r->err)
@@ -340,15 +342,17 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
     return st;
 }
 
-/* Speed against native Embree of the same width, same set and threads:
- * single rays and streams against rtcIntersect1 / rtcOccluded1 ("embree"),
- * packets of 8 and 16 against "embree-p8" and "embree-p16". */
+/* Speed against native Embree of the same kind, same set and threads:
+ * single rays against rtcIntersect1 / rtcOccluded1 ("embree"), packets of 8
+ * and 16 against "embree-p8" and "embree-p16", streams against
+ * rtcIntersect1M / rtcOccluded1M ("embree-stream"). */
 static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
 {
     for (size_t i = first_row; i < out->count; i++) {
         const sc_tracer_def *d = sc_tracer_find(out->rows[i].tracer);
-        const int w = d && (d->packet == 8 || d->packet == 16) ? d->packet : 0;
-        const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : "embree";
+        const int w = d ? d->packet : 0;
+        const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
+                                                                                                  : "embree";
         for (size_t j = first_row; j < out->count; j++)
             if (strcmp(out->rows[j].tracer, ref) == 0 && out->rows[j].rays == out->rows[i].rays &&
                 out->rows[j].threads == out->rows[i].threads)

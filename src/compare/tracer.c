@@ -35,6 +35,7 @@ static const sc_tracer_def all_tracers[] = {
     { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0 },
     { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8 },
     { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16 },
+    { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM },
     { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
     { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
     { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
@@ -288,7 +289,11 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
         ecp = &ec;
     }
     sc_status st;
-    if (occ && t->def.packet)
+    if (t->def.packet == SC_TRACER_STREAM && occ)
+        st = sc_embree_occluded_stream(t->handle, rays, n, occ, !t->incoherent, ecp);
+    else if (t->def.packet == SC_TRACER_STREAM)
+        st = sc_embree_intersect_stream(t->handle, rays, n, hits, !t->incoherent, ecp);
+    else if (occ && t->def.packet)
         st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, ecp);
     else if (occ)
         st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);

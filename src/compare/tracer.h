@@ -43,6 +43,8 @@ typedef struct sc_tracer {
     int prefilter;           /* reports sphere tests */
     int counted;             /* reports triangle tests */
     int fp_exact;            /* false positives are counted exactly */
+    int incoherent;          /* Embree's stream flag for the next runs: the rays are
+                              * incoherent (diffuse, random); set by the caller */
 } sc_tracer;
 
 /* The named tracers of this build, in table order (NULL-terminated). */

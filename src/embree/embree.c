@@ -605,3 +605,67 @@ sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays
         ctr->rays += n;
     return SC_OK;
 }
+
+/* rtcIntersect1M / rtcOccluded1M over chunks of AoS rays (Embree's stream
+ * API), with the coherent or incoherent context flag. */
+enum { STREAM_CHUNK = 256 };
+
+sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent,
+                                     sc_embree_counters *ctr)
+{
+    if (!e || (n && (!rays || !hits)))
+        return SC_ERR_INVALID_ARGUMENT;
+    ctx_ext c;
+    ctx_init(&c, ctr, coherent);
+    c.rtc.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    struct RTCRayHit *rh = aligned_alloc(64, STREAM_CHUNK * sizeof *rh);
+    if (!rh)
+        return SC_ERR_OUT_OF_MEMORY;
+    for (size_t base = 0; base < n; base += STREAM_CHUNK) {
+        const unsigned m = n - base < STREAM_CHUNK ? (unsigned)(n - base) : STREAM_CHUNK;
+        for (unsigned i = 0; i < m; i++) {
+            to_rtc(&rh[i].ray, &rays[base + i]);
+            rh[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh[i].hit.primID = RTC_INVALID_GEOMETRY_ID;
+            rh[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect1M(e->scene, &c.rtc, rh, m, sizeof *rh);
+        for (unsigned i = 0; i < m; i++) {
+            sc_hitrec *h = &hits[base + i];
+            if (rh[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+                h->t = INFINITY, h->u = h->v = 0, h->prim = SC_HITREC_MISS;
+            } else {
+                h->t = rh[i].ray.tfar, h->u = rh[i].hit.u, h->v = rh[i].hit.v, h->prim = rh[i].hit.primID;
+            }
+        }
+    }
+    free(rh);
+    if (ctr)
+        ctr->rays += n;
+    return SC_OK;
+}
+
+sc_status sc_embree_occluded_stream(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded, int coherent,
+                                    sc_embree_counters *ctr)
+{
+    if (!e || (n && (!rays || !occluded)))
+        return SC_ERR_INVALID_ARGUMENT;
+    ctx_ext c;
+    ctx_init(&c, ctr, coherent);
+    c.rtc.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    struct RTCRay *r = aligned_alloc(64, STREAM_CHUNK * sizeof *r);
+    if (!r)
+        return SC_ERR_OUT_OF_MEMORY;
+    for (size_t base = 0; base < n; base += STREAM_CHUNK) {
+        const unsigned m = n - base < STREAM_CHUNK ? (unsigned)(n - base) : STREAM_CHUNK;
+        for (unsigned i = 0; i < m; i++)
+            to_rtc(&r[i], &rays[base + i]);
+        rtcOccluded1M(e->scene, &c.rtc, r, m, sizeof *r);
+        for (unsigned i = 0; i < m; i++)
+            occluded[base + i] = r[i].tfar == -INFINITY;
+    }
+    free(r);
+    if (ctr)
+        ctr->rays += n;
+    return SC_OK;
+}

@@ -225,128 +225,99 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 }
 
 /* ---- streams ---------------------------------------------------------------
- * Runs of 16 rays that look coherent go as a packet, the rest one by one.
- * Coherent: one direction octant (sign bits, checked first: it fails early
- * and cheaply for diffuse and random rays), and directions scaled to unit
- * L1 length within SC_STREAM_SPREAD of each other per axis (about 10
- * degrees): camera tiles and shadow rays of a tile to one light pass. */
-#define SC_STREAM_SPREAD 0.2f
+ * Every run of 16 consecutive rays goes as one packet: the packet kernel
+ * itself copes with mixed octants and hands lanes that thin out to the
+ * single-ray kernel, and consecutive rays of a renderer (pixel tiles, the
+ * bounces and shadow rays of one tile) share at least their origins'
+ * neighbourhood. Measured in docs/compare.md ("Packets and streams"):
+ * in-order packets beat both single rays and octant-sorted packets on
+ * every ray set there, diffuse bounces included. */
 
-static int run_one_octant(const sc_ray *const *r, unsigned k)
+/* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
+ * by one (which answers the others). */
+static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_stride, char *out,
+                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any)
 {
-    uint32_t any = 0, all = 7;
-    for (unsigned i = 0; i < k; i++) {
-        uint32_t b[3];
-        for (int a = 0; a < 3; a++)
-            memcpy(&b[a], &r[i]->dir[a], sizeof b[a]);
-        uint32_t sg = (b[0] >> 31) | (b[1] >> 31) << 1 | (b[2] >> 31) << 2;
-        any |= sg, all &= sg;
-        if (any != all)
-            return 0;
-    }
-    return 1;
-}
-
-static int packet_narrow(const sc_ray_packet16 *p)
-{
+#define RAY(j) ((const sc_ray *)(const void *)(rays + (base + (j)) * ray_stride))
+#define OUT(j) (out + (base + (j)) * out_stride)
+    sc_ray_packet16 p __attribute__((aligned(64)));
+    int32_t valid[16];
+    float *soa = p.ox;
 #if defined(__SSE2__)
-    const __m128 sgn = _mm_set1_ps(-0.0f), one = _mm_set1_ps(1.0f);
-    __m128 lo[3], hi[3];
-    for (unsigned i = 0; i < 16; i += 4) {
-        const __m128 d[3] = { _mm_load_ps(p->dx + i), _mm_load_ps(p->dy + i), _mm_load_ps(p->dz + i) };
-        const __m128 inv = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sgn, d[0]), _mm_andnot_ps(sgn, d[1])),
-                                                     _mm_andnot_ps(sgn, d[2])));
-        for (int a = 0; a < 3; a++) {
-            const __m128 u = _mm_mul_ps(d[a], inv);
-            lo[a] = i ? _mm_min_ps(lo[a], u) : u;
-            hi[a] = i ? _mm_max_ps(hi[a], u) : u;
-        }
-    }
-    int ok = 1;
-    for (int a = 0; a < 3; a++) {
-        float l[4], h[4];
-        _mm_storeu_ps(l, lo[a]), _mm_storeu_ps(h, hi[a]);
-        float mn = l[0], mx = h[0];
-        for (int j = 1; j < 4; j++)
-            mn = l[j] < mn ? l[j] : mn, mx = h[j] > mx ? h[j] : mx;
-        ok &= mx - mn <= SC_STREAM_SPREAD;
-    }
-    return ok;
-#else
-    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (unsigned i = 0; i < 16; i++) {
-        float inv = 1 / (fabsf(p->dx[i]) + fabsf(p->dy[i]) + fabsf(p->dz[i]));
-        float u[3] = { p->dx[i] * inv, p->dy[i] * inv, p->dz[i] * inv };
-        for (int a = 0; a < 3; a++) {
-            lo[a] = u[a] < lo[a] ? u[a] : lo[a];
-            hi[a] = u[a] > hi[a] ? u[a] : hi[a];
-        }
-    }
-    return hi[0] - lo[0] <= SC_STREAM_SPREAD && hi[1] - lo[1] <= SC_STREAM_SPREAD &&
-           hi[2] - lo[2] <= SC_STREAM_SPREAD;
+    if (cnt == 16) {
+        /* rows ox oy oz tmin dx dy dz tmax: 4x4 transposes of the rays'
+         * two halves (sc_ray is org, tmin, dir, tmax) */
+        for (unsigned i = 0; i < 16; i += 4)
+            for (unsigned h = 0; h < 8; h += 4) {
+                __m128 r0 = _mm_loadu_ps(RAY(i)->org + h), r1 = _mm_loadu_ps(RAY(i + 1)->org + h);
+                __m128 r2 = _mm_loadu_ps(RAY(i + 2)->org + h), r3 = _mm_loadu_ps(RAY(i + 3)->org + h);
+                _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+                _mm_store_ps(soa + (h + 0) * 16 + i, r0);
+                _mm_store_ps(soa + (h + 1) * 16 + i, r1);
+                _mm_store_ps(soa + (h + 2) * 16 + i, r2);
+                _mm_store_ps(soa + (h + 3) * 16 + i, r3);
+            }
+        for (unsigned i = 0; i < 16; i++)
+            valid[i] = 1;
+    } else
 #endif
+    {
+        for (unsigned i = 0; i < 16; i++) {
+            const sc_ray *r = RAY(i < cnt ? i : cnt - 1);
+            valid[i] = i < cnt;
+            p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
+            p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
+        }
+    }
+    if (any) {
+        int32_t occ[16];
+        if (sc_trace_any16(bvh, valid, &p, occ, stats) == SC_OK) {
+            for (unsigned i = 0; i < cnt; i++)
+                *(int32_t *)(void *)OUT(i) = occ[i];
+            return SC_OK;
+        }
+    } else {
+        sc_hit_packet16 h __attribute__((aligned(64)));
+        if (sc_trace_closest16(bvh, valid, &p, &h, stats) == SC_OK) {
+            for (unsigned i = 0; i < cnt; i++) {
+                sc_hitrec *o = (sc_hitrec *)(void *)OUT(i);
+                o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
+            }
+            return SC_OK;
+        }
+    }
+    sc_status status = SC_OK;
+    for (unsigned i = 0; i < cnt; i++) {
+        sc_status st;
+        if (any) {
+            int o = 0;
+            st = sc_trace_any(bvh, RAY(i), &o, stats);
+            if (st == SC_OK)
+                *(int32_t *)(void *)OUT(i) = o;
+        } else {
+            st = sc_trace_closest(bvh, RAY(i), (sc_hitrec *)(void *)OUT(i), stats);
+        }
+        if (st != SC_OK)
+            status = st;
+    }
+    return status;
+#undef RAY
+#undef OUT
 }
 
 static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
                         size_t n, unsigned flags, sc_trace_stats *stats, int any)
 {
     if (!bvh || (n && (!rays || !out)) || ray_stride < sizeof(sc_ray) ||
-        out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || (flags & ~(unsigned)SC_TRACE_INCOHERENT))
+        out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || flags != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    const int packets = !(flags & SC_TRACE_INCOHERENT) && (k->closest_p16 || k->closest_p8);
     sc_status status = SC_OK;
     for (size_t base = 0; base < n; base += 16) {
         const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
-        const sc_ray *run[16];
-        for (unsigned i = 0; i < cnt; i++)
-            run[i] = (const sc_ray *)(const void *)((const char *)rays + (base + i) * ray_stride);
-        char *o0 = (char *)out + base * out_stride;
-        if (packets && cnt > 1 && run_one_octant(run, cnt)) {
-            sc_ray_packet16 p __attribute__((aligned(64)));
-            int32_t valid[16];
-            for (unsigned i = 0; i < 16; i++) {
-                const sc_ray *r = run[i < cnt ? i : cnt - 1];
-                p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
-                p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
-            }
-            for (unsigned i = 0; i < 16; i++)
-                valid[i] = i < cnt;
-            /* a run with a refused ray falls through to the rays one by one,
-             * which answer the others */
-            if (packet_narrow(&p)) {
-                if (any) {
-                    int32_t occ[16];
-                    if (sc_trace_any16(bvh, valid, &p, occ, stats) == SC_OK) {
-                        for (unsigned i = 0; i < cnt; i++)
-                            *(int32_t *)(void *)(o0 + i * out_stride) = occ[i];
-                        continue;
-                    }
-                } else {
-                    sc_hit_packet16 h __attribute__((aligned(64)));
-                    if (sc_trace_closest16(bvh, valid, &p, &h, stats) == SC_OK) {
-                        for (unsigned i = 0; i < cnt; i++) {
-                            sc_hitrec *o = (sc_hitrec *)(void *)(o0 + i * out_stride);
-                            o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
-                        }
-                        continue;
-                    }
-                }
-            }
-        }
-        for (unsigned i = 0; i < cnt; i++) {
-            sc_status st;
-            if (any) {
-                int o = 0;
-                st = sc_trace_any(bvh, run[i], &o, stats);
-                if (st == SC_OK)
-                    *(int32_t *)(void *)(o0 + i * out_stride) = o;
-            } else {
-                st = sc_trace_closest(bvh, run[i], (sc_hitrec *)(void *)(o0 + i * out_stride), stats);
-            }
-            if (st != SC_OK)
-                status = st;
-        }
+        sc_status st = stream_packet(bvh, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
+                                     stats, any);
+        if (st != SC_OK)
+            status = st;
     }
     return status;
 }

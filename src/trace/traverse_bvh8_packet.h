@@ -29,6 +29,11 @@
 #include "bvh/bvh_internal.h"
 #include "traverse_stack.h"
 
+/* Lanes at or below this count leave the packet for single rays. */
+#ifndef SC_PACKET_THIN
+#define SC_PACKET_THIN 2
+#endif
+
 #define PCAT_(a, b) a##_##b
 #define PCAT(a, b) PCAT_(a, b)
 #define PV(op) PCAT(VP, op)
@@ -283,6 +288,43 @@ SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
 }
 
+/* Lanes m finish the subtree ref as single rays (traverse_bvh8_single.h,
+ * the same kernel as sc_trace_closest / sc_trace_any) with tmax = the
+ * lane's best t so far; a hit replaces the lane's best by the (t, prim)
+ * order. The single kernel returns u and v divided out: den = 1. */
+SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref, uint32_t m, pvec *tmaxv,
+                                  pvec *bun, pvec *bvn, pvec *bden, uint32_t *bprim, uint32_t *alive,
+                                  sc_trace_stats *st, const int ANY, const int STATS)
+{
+    float tm[PK], un[PK], vn[PK], dn[PK];
+    PV(store)(tm, *tmaxv);
+    if (!ANY)
+        PV(store)(un, *bun), PV(store)(vn, *bvn), PV(store)(dn, *bden);
+    for (; m; m &= m - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(m);
+        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, tm[l] };
+        sc_hitrec h;
+        int hit;
+        if (STATS) {
+            hit = traverse_single(bvh, &ray, &h, st, ANY, 1, SC_TRI_WATERTIGHT, -1, ref);
+            st->rays--;                       /* counted once, by the packet */
+        } else {
+            hit = traverse_by_octant(bvh, &ray, &h, ANY, SC_TRI_WATERTIGHT, ref);
+        }
+        if (ANY) {
+            if (hit)
+                *alive &= ~(1u << l);
+        } else if (h.prim != SC_HITREC_MISS && (h.t < tm[l] || h.prim < bprim[l])) {
+            tm[l] = h.t, un[l] = h.u, vn[l] = h.v, dn[l] = 1;
+            bprim[l] = h.prim;
+        }
+    }
+    if (!ANY) {
+        *tmaxv = PV(load)(tm);
+        *bun = PV(load)(un), *bvn = PV(load)(vn), *bden = PV(load)(dn);
+    }
+}
+
 /* The traversal. UNI = 1: every lane has the packet's octant and shear axes
  * (the near planes and the sheared axes are the same rows for all lanes). */
 SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
@@ -320,6 +362,12 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
     uint32_t m = lanes;
     for (;;) {
         while (!sc_ref_is_leaf(ref)) {
+            if (__builtin_popcount(m) <= SC_PACKET_THIN) {
+                /* a thin packet: its lanes finish this subtree as single
+                 * rays, each bounded by its own best hit so far */
+                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, bprim, &alive, st, ANY, STATS);
+                goto pop;
+            }
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
             if (STATS)
                 st->nodes++;

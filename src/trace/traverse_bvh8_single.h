@@ -27,7 +27,7 @@
 
 SC_TRAVERSE_INLINE int
 traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
-                const int ANY, const int STATS, const int TEST, const int OCT)
+                const int ANY, const int STATS, const int TEST, const int OCT, const uint64_t root)
 {
     /* exact mode: tmax is the culling bound, a float >= the exact t of the
      * closest hit so far (xb), which sc_exact_resolve chooses exactly */
@@ -55,7 +55,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     if (!bvh->has_root)
         goto done;
 
-    uint64_t ref = 0;                  /* the root, nodes[0] */
+    uint64_t ref = root;               /* nodes[0], or a subtree (packets hand thin lanes over) */
     for (;;) {
         while (!sc_ref_is_leaf(ref)) {
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
@@ -195,70 +195,70 @@ SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
 }
 
 SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
-                                          const int TEST)
+                                          const int TEST, const uint64_t root)
 {
     switch (ray_octant(r)) {
-    case -2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2);
-    case 0: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 0);
-    case 1: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 1);
-    case 2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 2);
-    case 3: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 3);
-    case 4: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 4);
-    case 5: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 5);
-    case 6: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 6);
-    default: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 7);
+    case -2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
+    case 0: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 0, root);
+    case 1: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 1, root);
+    case 2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 2, root);
+    case 3: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 3, root);
+    case 4: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 4, root);
+    case 5: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 5, root);
+    case 6: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 6, root);
+    default: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 7, root);
     }
 }
 
 static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT);
+    traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT, 0);
 }
 static SC_TARGET int any_watertight(const sc_bvh *b, const sc_ray *r)
 {
-    return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT, 0);
 }
 static SC_TARGET void closest_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
-    traverse_single(b, r, h, s, 0, 1, SC_TRI_WATERTIGHT, -1);
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_WATERTIGHT, -1, 0);
 }
 static SC_TARGET int any_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
 {
-    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_WATERTIGHT, -1);
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_WATERTIGHT, -1, 0);
 }
 
 static SC_TARGET void closest_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    traverse_by_octant(b, r, h, 0, SC_TRI_MOLLER);
+    traverse_by_octant(b, r, h, 0, SC_TRI_MOLLER, 0);
 }
 static SC_TARGET int any_moller(const sc_bvh *b, const sc_ray *r)
 {
-    return traverse_by_octant(b, r, NULL, 1, SC_TRI_MOLLER);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_MOLLER, 0);
 }
 static SC_TARGET void closest_stats_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
-    traverse_single(b, r, h, s, 0, 1, SC_TRI_MOLLER, -1);
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_MOLLER, -1, 0);
 }
 static SC_TARGET int any_stats_moller(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
 {
-    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_MOLLER, -1);
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_MOLLER, -1, 0);
 }
 
 static SC_TARGET void closest_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
-    traverse_by_octant(b, r, h, 0, SC_TRI_EXACT);
+    traverse_by_octant(b, r, h, 0, SC_TRI_EXACT, 0);
 }
 static SC_TARGET int any_exact(const sc_bvh *b, const sc_ray *r)
 {
-    return traverse_by_octant(b, r, NULL, 1, SC_TRI_EXACT);
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_EXACT, 0);
 }
 static SC_TARGET void closest_stats_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
-    traverse_single(b, r, h, s, 0, 1, SC_TRI_EXACT, -1);
+    traverse_single(b, r, h, s, 0, 1, SC_TRI_EXACT, -1, 0);
 }
 static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_stats *s)
 {
-    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_EXACT, -1);
+    return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_EXACT, -1, 0);
 }
 
 /* Initializer of a sc_trace_kernels[SC_TRI_TEST_COUNT] table; a translation
