@@ -8,7 +8,8 @@
 # New inputs go to build-fuzz/corpus/<name> (not into git). With --keep, the
 # kept corpus and the new inputs are merged (libFuzzer -merge=1: the smallest
 # set of inputs with the same coverage) into tests/fuzz/corpus/<name>, which
-# ctest replays (test_fuzz_replay_<name>); commit it. A crash stops the run
+# ctest replays (test_fuzz_replay_<name>); commit it. Named files there
+# (hand-written seeds, regress-* inputs) are always kept. A crash stops the run
 # and leaves crash-* in build-fuzz/: fix it, then copy the input into
 # tests/fuzz/corpus/<name>/ so the replay test keeps it as a regression.
 set -euo pipefail
@@ -45,6 +46,9 @@ for t in "${targets[@]}"; do
     mkdir -p "$merged"
     (cd "$dir" && ./tests/fuzz/"$t" -merge=1 -max_len=4096 "merged-$name" "../$kept" "corpus/$name" \
        2>&1 | grep -E 'MERGE-OUTER: [0-9]+ new files' || true)
+    # named inputs (seeds written by hand, regress-* crash inputs) stay
+    # whatever their coverage; the merge names files by their hash
+    find "$kept" -maxdepth 1 -type f ! -regex '.*/[0-9a-f]\{40\}' -exec cp {} "$merged"/ \;
     rm -rf "$kept.old"
     mv "$kept" "$kept.old" && mv "$merged" "$kept" && rm -rf "$kept.old"
     echo "kept: $kept $(ls "$kept" | wc -l) files, $(du -sh "$kept" | cut -f1)"

@@ -40,7 +40,16 @@ one_line 2 render proc:sphere:200 --width
 one_line 2 render proc:sphere:200 -o x.png --width=0
 one_line 2 compare proc:sphere:200 --bogus
 one_line 2 bench proc:sphere:200 --threads=1,,2
+one_line 2 bench proc:sphere:200 --packet 4
 one_line 2 raster-check proc:sphere:200 --prefilter=sometimes
+
+# bench --packet 16 runs our packets against Embree's and says so
+"$S" bench proc:sphere:2000 --packet 16 --repeats 1 --size 32x32 --threads 1 --leaf 4 --prefilter off,circum \
+  > pk.txt || no "bench --packet 16: exit status $?"
+if grep -q '^# embree: 3' pk.txt; then
+  grep -q 'rtcIntersect16' pk.txt || no "bench --packet 16 does not name Embree's packets"
+fi
+grep -q '^primary .* circum ' pk.txt || no "bench --packet 16 printed no circum row"
 
 # --opt=value and -- (an operand after -- is never an option)
 "$S" accuracy --n=3 --seed=2 > acc.txt || no "accuracy --n=3 --seed=2: exit status $?"

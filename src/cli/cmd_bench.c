@@ -26,7 +26,8 @@
 static const sc_name ray_kinds[] = { { "primary", SC_BENCH_PRIMARY }, { "shadow", SC_BENCH_SHADOW } };
 static const sc_name embree_modes[] = { { "default", 0 }, { "robust", 1 } };
 
-enum { O_CSV, O_RAYS, O_THREADS, O_LEAF, O_PREFILTER, O_SIZE, O_REPEATS, O_ISA, O_EMBREE, O_TRIANGLE, O_TRAV };
+enum { O_CSV, O_RAYS, O_THREADS, O_LEAF, O_PREFILTER, O_SIZE, O_REPEATS, O_ISA, O_EMBREE, O_TRIANGLE, O_TRAV,
+       O_PACKET };
 static const sc_cli_opt opts[] = {
     [O_CSV] = { "csv", 0, "FILE", "also write one row per measurement", NULL },
     [O_RAYS] = { "rays", 0, "LIST", "primary,shadow", "both" },
@@ -40,6 +41,8 @@ static const sc_cli_opt opts[] = {
     [O_TRIANGLE] = { "triangle", 0, "TEST", "watertight|moller|exact: our triangle test", "watertight" },
     [O_TRAV] = { "trav-cost", 0, "C", "SAH cost of a node visit relative to a leaf block test",
                  "the builder's, sc_bvh_config_default" },
+    [O_PACKET] = { "packet", 0, "W", "0: single rays; 8 or 16: packets of consecutive rays (4x4 pixel tiles), "
+                   "against Embree's packets of the same width", "0" },
 };
 
 typedef struct args {
@@ -125,6 +128,12 @@ static int on_option(void *ctx, int opt, const char *val)
         bad = sc_name_lookup(embree_modes, SC_NAMES_COUNT(embree_modes), val, &o->embree_robust) != 0;
         break;
     case O_TRIANGLE: bad = sc_tri_test_from_name(val, &o->tri) != SC_OK; break;
+    case O_PACKET:
+        if (sc_cli_int(CMD, opts[opt].name, val, 0, 16, &v) != 0)
+            return 2;
+        bad = v != 0 && v != 8 && v != 16;
+        o->packet = (int)v;
+        break;
     case O_TRAV: {
         char *end;
         double c = strtod(val, &end);
@@ -231,8 +240,13 @@ static void print_machine(const sc_bench_options *o, int cycles_fd)
         printf("%s%d", i ? "," : " ", o->threads[i]);
     printf(" (worker threads, rays handed out in chunks of 1024)\n");
 #ifdef SC_HAVE_EMBREE
-    printf("# embree: %s, %s scene, rtcIntersect1 / rtcOccluded1 on the same rays\n", RTC_VERSION_STRING,
-           o->embree_robust ? "robust" : "default");
+    if (o->packet)
+        printf("# embree: %s, %s scene, rtcIntersect%d / rtcOccluded%d on the same rays; ours: sc_trace_closest%d / "
+               "sc_trace_any%d\n", RTC_VERSION_STRING, o->embree_robust ? "robust" : "default", o->packet, o->packet,
+               o->packet, o->packet);
+    else
+        printf("# embree: %s, %s scene, rtcIntersect1 / rtcOccluded1 on the same rays\n", RTC_VERSION_STRING,
+               o->embree_robust ? "robust" : "default");
 #else
     printf("# embree: not built in; ratios are n/a\n");
 #endif

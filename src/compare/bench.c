@@ -144,6 +144,13 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
     const sc_tracer_def *def = sc_tracer_find(c->o->embree_robust ? "embree-robust" : "embree");
     if (!def)
         return SC_OK;
+    sc_tracer_def pdef;
+    if (c->o->packet) {
+        /* Embree's packets of the same width (robust flag as asked) */
+        pdef = *def;
+        pdef.packet = c->o->packet;
+        def = &pdef;
+    }
     sc_status st = sc_tracer_build(&c->emb, def, &c->mesh);
     if (st != SC_OK) {
         snprintf(c->err, c->errlen, "Embree: %s", sc_strerror(st));
@@ -237,6 +244,7 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
         snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
         return st;
     }
+    t.def.packet = o->packet;
     sc_bvh_info info;
     sc_bvh_get_info(sc_tracer_bvh(&t), &info);
     sc_bench_row r;

@@ -24,6 +24,7 @@ typedef struct sc_bench_options {
     int embree_robust;
     float trav_cost;                               /* < 0: the builder's default */
     sc_tri_test tri;
+    int packet;                                    /* 0: single rays; 8, 16: packets (Embree's too) */
 } sc_bench_options;
 
 void sc_bench_options_default(sc_bench_options *o);

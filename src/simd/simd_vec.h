@@ -134,6 +134,8 @@ SC_VI SC_ATTR_AVX2 f32x8_t f32x8_max(f32x8_t a, f32x8_t b) { return _mm256_max_p
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_min(f32x8_t a, f32x8_t b) { return _mm256_min_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_abs(f32x8_t a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sqrt(f32x8_t a) { return _mm256_sqrt_ps(a); }
+/* 1/sqrt(a) within 1.5 * 2^-12 relative (rsqrtps): inf for 0, NaN below. */
+SC_VI SC_ATTR_AVX2 f32x8_t f32x8_rsqrt(f32x8_t a) { return _mm256_rsqrt_ps(a); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_lt(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_le(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_gt(f32x8_t a, f32x8_t b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
@@ -233,6 +235,8 @@ SC_VI SC_ATTR_AVX512 f32x16_t f32x16_max(f32x16_t a, f32x16_t b) { return _mm512
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_min(f32x16_t a, f32x16_t b) { return _mm512_min_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_abs(f32x16_t a) { return _mm512_abs_ps(a); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sqrt(f32x16_t a) { return _mm512_sqrt_ps(a); }
+/* 1/sqrt(a) within 2^-14 relative (vrsqrt14ps): inf for 0, NaN below. */
+SC_VI SC_ATTR_AVX512 f32x16_t f32x16_rsqrt(f32x16_t a) { return _mm512_rsqrt14_ps(a); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_lt(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_le(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
 SC_VI SC_ATTR_AVX512 f32x16_m f32x16_gt(f32x16_t a, f32x16_t b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }

@@ -218,14 +218,18 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
  * cone when e cos - max(d, 0) sin > r (the distance from the centre to the
  * cone's surface; d <= 0 only ever loosens the test, so the cone's sin and
  * cos may both err outward). The rounding of v, d and e is below 2^-21 |v|;
- * r grows by 2^-16 (|vx| + |vy| + |vz|) and 2^-16 r. Centres with v.v
+ * r grows by 2^-16 (|vx| + |vy| + |vz|) and by 2^-10 r, and cos shrinks by
+ * 2^-10: the square roots of r^2 and e^2 come from the approximate
+ * reciprocal square root (error below 2^-11), two multiplies instead of two
+ * divisions' worth of latency. Centres with v.v
  * outside [2^-100, 2^100] (subnormal or flushed products, overflow) and
  * empty lanes are never culled here. */
 SC_X86_INLINE uint32_t PFN(pk_cone_cull)(const pk_ctx *c, const float *blk, unsigned W)
 {
     const pvec ax = PV(set1)(c->axis[0]), ay = PV(set1)(c->axis[1]), az = PV(set1)(c->axis[2]);
-    const pvec cs = PV(set1)(c->cos_t), sn = PV(set1)(c->sin_t), zero = PV(set1)(0);
-    const pvec grow = PV(set1)(1 + 0x1p-16f), slack = PV(set1)(0x1p-16f);
+    /* cos lowered by 2^-10 for the approximate sqrt of e^2 */
+    const pvec cs = PV(set1)(c->cos_t * (1 - 0x1p-10f)), sn = PV(set1)(c->sin_t), zero = PV(set1)(0);
+    const pvec grow = PV(set1)(1 + 0x1p-10f), slack = PV(set1)(0x1p-16f);
     uint32_t cull = 0;
     for (unsigned h = 0; h < W; h += PK) {
         pvec vx = PV(sub)(PV(load)(blk + h), PV(set1)(c->apex[0]));
@@ -239,9 +243,12 @@ SC_X86_INLINE uint32_t PFN(pk_cone_cull)(const pk_ctx *c, const float *blk, unsi
         pvec ez = PV(sub)(PV(mul)(vx, ay), PV(mul)(vy, ax));
         pvec ee = PV(add)(PV(add)(PV(mul)(ex, ex), PV(mul)(ey, ey)), PV(mul)(ez, ez));
         pvec l1 = PV(add)(PV(add)(PV(abs)(vx), PV(abs)(vy)), PV(abs)(vz));
-        pvec r = PV(add)(PV(mul)(PV(sqrt)(PV(max)(r2, zero)), grow), PV(mul)(l1, slack));
+        /* square roots from the approximate reciprocal (error below
+         * 2^-11): r rounded up, e down; x * rsqrt(x) is NaN for x = 0,
+         * which culls nothing */
+        pvec r = PV(add)(PV(mul)(PV(mul)(r2, PV(rsqrt)(r2)), grow), PV(mul)(l1, slack));
         pvec rhs = PV(add)(r, PV(mul)(PV(max)(d, zero), sn));
-        pvec lhs = PV(mul)(PV(sqrt)(ee), cs);
+        pvec lhs = PV(mul)(PV(mul)(ee, PV(rsqrt)(ee)), cs);
         PV(m) out = PV(gt)(lhs, rhs);
         PV(m) trusted = PV(and)(PV(and)(PV(ge)(vv, PV(set1)(0x1p-100f)), PV(le)(vv, PV(set1)(0x1p100f))),
                                 PV(ge)(r2, zero));
