@@ -162,12 +162,12 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
  *
  * n rays at byte stride ray_stride (>= sizeof(sc_ray)), results at
  * hit_stride (>= sizeof(sc_hitrec); for any: occluded_stride >= 4, an
- * int32_t 1/0 per ray), like rtcIntersect1M / rtcOccluded1M. Every run of
- * 16 consecutive rays is traced as one packet (sc_trace_closest16), which
- * adapts to the rays: one-origin runs get the frustum and cone culls, lanes
- * that part ways finish as single rays. Keep neighbours in the array
- * neighbours in space (pixel tiles; a tile's bounces and shadow rays
- * together). Results are those of the single-ray calls, bit for bit.
+ * int32_t 1/0 per ray), like rtcIntersect1M / rtcOccluded1M. A run of 16
+ * consecutive rays whose directions are close (camera tiles, shadow rays to
+ * one light) or whose origins are close (a pixel tile's bounces) is traced
+ * as one packet (sc_trace_closest16); other runs ray by ray. Keep
+ * neighbours in the array neighbours in space to gain. Results are those
+ * of the single-ray calls, bit for bit.
  * flags: 0 (reserved). A ray sc_trace_closest would refuse gets no result
  * and makes the call return INVALID_ARGUMENT after tracing the others. */
 sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,

@@ -225,13 +225,60 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 }
 
 /* ---- streams ---------------------------------------------------------------
- * Every run of 16 consecutive rays goes as one packet: the packet kernel
- * itself copes with mixed octants and hands lanes that thin out to the
- * single-ray kernel, and consecutive rays of a renderer (pixel tiles, the
- * bounces and shadow rays of one tile) share at least their origins'
- * neighbourhood. Measured in docs/compare.md ("Packets and streams"):
- * in-order packets beat both single rays and octant-sorted packets on
- * every ray set there, diffuse bounces included. */
+ * A run of 16 consecutive rays goes as one packet when it looks coherent,
+ * else ray by ray. Coherent: directions within a narrow box once scaled to
+ * unit L1 length (camera tiles, shadow rays of a tile to one light), or
+ * origins within 1/16 of the scene's extent (the bounces of one pixel tile:
+ * the packet kernel hands lanes that part ways to the single-ray kernel).
+ * Random rays (origins and directions all over) pass neither and go one by
+ * one, which measured 1.4x faster for them than packets (docs/compare.md,
+ * "Packets and streams"). */
+#define SC_STREAM_SPREAD 0.2f
+#define SC_STREAM_ORIGINS (1.0f / 16)
+
+static int packet_coherent(const sc_ray_packet16 *p, const sc_bvh *bvh)
+{
+    float dlo[3], dhi[3], olo[3], ohi[3];
+    const float *org[3] = { p->ox, p->oy, p->oz }, *dir[3] = { p->dx, p->dy, p->dz };
+#if defined(__SSE2__)
+    const __m128 sgn = _mm_set1_ps(-0.0f), one = _mm_set1_ps(1.0f);
+    __m128 vdlo[3], vdhi[3], volo[3], vohi[3];
+    for (unsigned i = 0; i < 16; i += 4) {
+        const __m128 d[3] = { _mm_load_ps(p->dx + i), _mm_load_ps(p->dy + i), _mm_load_ps(p->dz + i) };
+        const __m128 inv = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sgn, d[0]), _mm_andnot_ps(sgn, d[1])),
+                                                     _mm_andnot_ps(sgn, d[2])));
+        for (int a = 0; a < 3; a++) {
+            const __m128 u = _mm_mul_ps(d[a], inv), o = _mm_load_ps(org[a] + i);
+            vdlo[a] = i ? _mm_min_ps(vdlo[a], u) : u, vdhi[a] = i ? _mm_max_ps(vdhi[a], u) : u;
+            volo[a] = i ? _mm_min_ps(volo[a], o) : o, vohi[a] = i ? _mm_max_ps(vohi[a], o) : o;
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        float l[4], h[4], ol[4], oh[4];
+        _mm_storeu_ps(l, vdlo[a]), _mm_storeu_ps(h, vdhi[a]), _mm_storeu_ps(ol, volo[a]), _mm_storeu_ps(oh, vohi[a]);
+        dlo[a] = fminf(fminf(l[0], l[1]), fminf(l[2], l[3])), dhi[a] = fmaxf(fmaxf(h[0], h[1]), fmaxf(h[2], h[3]));
+        olo[a] = fminf(fminf(ol[0], ol[1]), fminf(ol[2], ol[3])), ohi[a] = fmaxf(fmaxf(oh[0], oh[1]), fmaxf(oh[2], oh[3]));
+    }
+#else
+    for (int a = 0; a < 3; a++)
+        dlo[a] = olo[a] = INFINITY, dhi[a] = ohi[a] = -INFINITY;
+    for (unsigned i = 0; i < 16; i++) {
+        float inv = 1 / (fabsf(p->dx[i]) + fabsf(p->dy[i]) + fabsf(p->dz[i]));
+        for (int a = 0; a < 3; a++) {
+            float u = dir[a][i] * inv, o = org[a][i];
+            dlo[a] = fminf(dlo[a], u), dhi[a] = fmaxf(dhi[a], u);
+            olo[a] = fminf(olo[a], o), ohi[a] = fmaxf(ohi[a], o);
+        }
+    }
+#endif
+    (void)dir;
+    int narrow = 1, near = 1;
+    for (int a = 0; a < 3; a++) {
+        narrow &= dhi[a] - dlo[a] <= SC_STREAM_SPREAD;
+        near &= ohi[a] - olo[a] <= SC_STREAM_ORIGINS * (bvh->root_hi[a] - bvh->root_lo[a]);
+    }
+    return narrow || near;
+}
 
 /* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
  * by one (which answers the others). */
@@ -269,6 +316,8 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
             p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
         }
     }
+    if (cnt == 16 && !packet_coherent(&p, bvh))
+        goto one_by_one;
     if (any) {
         int32_t occ[16];
         if (sc_trace_any16(bvh, valid, &p, occ, stats) == SC_OK) {
@@ -286,6 +335,7 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
             return SC_OK;
         }
     }
+one_by_one:;
     sc_status status = SC_OK;
     for (unsigned i = 0; i < cnt; i++) {
         sc_status st;
