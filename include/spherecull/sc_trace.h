@@ -10,7 +10,10 @@
  * tmin <= t <= tmax; both faces are hit; the direction need not be unit
  * length. hit.t is the ray parameter, hit.u and hit.v the barycentric weights
  * of the triangle's second and third vertex (P = (1-u-v) V0 + u V1 + v V2),
- * hit.prim the triangle's index in the build input.
+ * hit.prim the triangle's index in the build input. Of hits at equal t the
+ * one with the smaller index is reported (SC_TRI_WATERTIGHT, SC_TRI_MOLLER),
+ * so the answer does not depend on the order the tree is walked in: the
+ * packet and stream calls below return the same bits.
  *
  * Traversal is robust (Ize 2013: conservative slab tests on exact float
  * boxes), so with the watertight triangle test a ray through a shared edge or
