@@ -280,6 +280,21 @@ static int packet_coherent(const sc_ray_packet16 *p, const sc_bvh *bvh)
     return narrow || near;
 }
 
+/* A quick "no" before the transpose: the first and the last ray of a run
+ * (opposite corners of a pixel tile) already differ more in direction and
+ * in origin than a coherent run may. Random rays leave here. */
+static int pair_incoherent(const sc_ray *a, const sc_ray *b, const sc_bvh *bvh)
+{
+    float la = fabsf(a->dir[0]) + fabsf(a->dir[1]) + fabsf(a->dir[2]);
+    float lb = fabsf(b->dir[0]) + fabsf(b->dir[1]) + fabsf(b->dir[2]);
+    int dir_far = 0, org_far = 0;
+    for (int k = 0; k < 3; k++) {
+        dir_far |= fabsf(a->dir[k] * lb - b->dir[k] * la) > SC_STREAM_SPREAD * la * lb;
+        org_far |= fabsf(a->org[k] - b->org[k]) > SC_STREAM_ORIGINS * (bvh->root_hi[k] - bvh->root_lo[k]);
+    }
+    return dir_far && org_far;
+}
+
 /* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
  * by one (which answers the others). */
 static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_stride, char *out,
@@ -290,6 +305,8 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
     sc_ray_packet16 p __attribute__((aligned(64)));
     int32_t valid[16];
     float *soa = p.ox;
+    if (cnt == 16 && pair_incoherent(RAY(0), RAY(15), bvh))
+        goto one_by_one;
 #if defined(__SSE2__)
     if (cnt == 16) {
         /* rows ox oy oz tmin dx dy dz tmax: 4x4 transposes of the rays'
