@@ -36,8 +36,6 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
  * One body per width: the argument checks, then the level's packet kernel,
  * or lane by lane where it has none. */
 
-#define SC_RAY_OF(r, i) { { (r)->ox[i], (r)->oy[i], (r)->oz[i] }, (r)->tmin[i], { (r)->dx[i], (r)->dy[i], (r)->dz[i] }, (r)->tmax[i] }
-
 /* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
  * conditions of sc_ray_valid four lanes at a time (SSE2, the x86-64
  * baseline): isfinite(d) as |d| <= FLT_MAX, which NaN fails. */
@@ -76,152 +74,100 @@ static int64_t packet_lanes(const int32_t *valid, const float *ox, const float *
 #endif
     return bad ? (int64_t)-1 : (int64_t)lanes;
 }
-#define PACKET_LANES(valid, r, K)                                                                    \
-    packet_lanes(valid, (r)->ox, (r)->oy, (r)->oz, (r)->tmin, (r)->dx, (r)->dy, (r)->dz, (r)->tmax, K)
-
 static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 1)) == 0; }
 
-static void closest_lanes(const sc_trace_kernels *k, const sc_bvh *bvh, const sc_ray *r, sc_hitrec *h,
-                          sc_trace_stats *st)
+/* One body for the four packet calls. rays: the packet's rows (ox oy oz
+ * tmin dx dy dz tmax, W floats each); out: the hit packet (closest) or the
+ * int32_t occlusion array (any). The level's kernel of that width; a
+ * 16-ray packet on a level with 8-lane kernels as two halves; lane by lane
+ * through the single-ray kernels where the level or test has none. */
+static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
+                              int any, sc_trace_stats *stats)
 {
-    if (st)
-        k->closest_stats(bvh, r, h, st);
-    else
-        k->closest(bvh, r, h);
+    const uintptr_t align = W * 4;
+    if (!bvh || !valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
+        return SC_ERR_INVALID_ARGUMENT;
+    const int64_t lanes64 = packet_lanes(valid, rows, rows + W, rows + 2 * W, rows + 3 * W, rows + 4 * W,
+                                         rows + 5 * W, rows + 6 * W, rows + 7 * W, W);
+    if (lanes64 < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const uint32_t lanes = (uint32_t)lanes64;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (W == 16 && (any ? k->any_p16 != NULL : k->closest_p16 != NULL)) {
+        if (any)
+            k->any_p16(bvh, (const sc_ray_packet16 *)(const void *)rows, lanes, out, stats);
+        else
+            k->closest_p16(bvh, (const sc_ray_packet16 *)(const void *)rows, lanes, out, stats);
+        return SC_OK;
+    }
+    if (any ? k->any_p8 != NULL : k->closest_p8 != NULL) {
+        /* 8 lanes, or each half of 16 as a packet of 8 */
+        for (unsigned h = 0; h < W / 8; h++) {
+            const uint32_t hl = (lanes >> (8 * h)) & 0xff;
+            if (!hl)
+                continue;
+            sc_ray_packet8 r8 __attribute__((aligned(32)));
+            for (unsigned f = 0; f < 8; f++)
+                memcpy(r8.ox + 8 * f, rows + f * W + 8 * h, 8 * sizeof(float));
+            if (any) {
+                k->any_p8(bvh, &r8, hl, (int32_t *)out + 8 * h, stats);
+            } else if (W == 8) {
+                k->closest_p8(bvh, &r8, hl, out, stats);
+            } else {
+                sc_hit_packet8 h8 __attribute__((aligned(32)));
+                sc_hit_packet16 *h16 = out;
+                k->closest_p8(bvh, &r8, hl, &h8, stats);
+                for (uint32_t e = hl; e; e &= e - 1) {
+                    const unsigned i = (unsigned)__builtin_ctz(e), j = 8 * h + i;
+                    h16->t[j] = h8.t[i], h16->u[j] = h8.u[i], h16->v[j] = h8.v[i], h16->prim[j] = h8.prim[i];
+                }
+            }
+        }
+        return SC_OK;
+    }
+    for (uint32_t e = lanes; e; e &= e - 1) {
+        const unsigned i = (unsigned)__builtin_ctz(e);
+        const sc_ray r = { { rows[i], rows[W + i], rows[2 * W + i] }, rows[3 * W + i],
+                           { rows[4 * W + i], rows[5 * W + i], rows[6 * W + i] }, rows[7 * W + i] };
+        if (any) {
+            ((int32_t *)out)[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
+            continue;
+        }
+        sc_hitrec h;
+        if (stats)
+            k->closest_stats(bvh, &r, &h, stats);
+        else
+            k->closest(bvh, &r, &h);
+        /* the t, u, v, prim rows of an 8- or 16-lane hit packet */
+        float *hf = out;
+        hf[i] = h.t, hf[W + i] = h.u, hf[2 * W + i] = h.v;
+        ((uint32_t *)out)[3 * W + i] = h.prim;
+    }
+    return SC_OK;
 }
 
 sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
                             sc_hit_packet8 *hits, sc_trace_stats *stats)
 {
-    if (!bvh || !valid || !rays || !hits || !aligned_to(rays, 32) || !aligned_to(hits, 32))
-        return SC_ERR_INVALID_ARGUMENT;
-    int64_t lanes = PACKET_LANES(valid, rays, 8);
-    if (lanes < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    if (k->closest_p8) {
-        k->closest_p8(bvh, rays, (uint32_t)lanes, hits, stats);
-        return SC_OK;
-    }
-    for (unsigned i = 0; i < 8; i++) {
-        if (!((lanes >> i) & 1))
-            continue;
-        const sc_ray r = SC_RAY_OF(rays, i);
-        sc_hitrec h;
-        closest_lanes(k, bvh, &r, &h, stats);
-        hits->t[i] = h.t, hits->u[i] = h.u, hits->v[i] = h.v, hits->prim[i] = h.prim;
-    }
-    return SC_OK;
-}
-
-sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
-                        int32_t occluded[8], sc_trace_stats *stats)
-{
-    if (!bvh || !valid || !rays || !occluded || !aligned_to(rays, 32))
-        return SC_ERR_INVALID_ARGUMENT;
-    int64_t lanes = PACKET_LANES(valid, rays, 8);
-    if (lanes < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    if (k->any_p8) {
-        k->any_p8(bvh, rays, (uint32_t)lanes, occluded, stats);
-        return SC_OK;
-    }
-    for (unsigned i = 0; i < 8; i++) {
-        if (!((lanes >> i) & 1))
-            continue;
-        const sc_ray r = SC_RAY_OF(rays, i);
-        occluded[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
-    }
-    return SC_OK;
-}
-
-/* Half h (0 or 1) of a 16-ray packet as an 8-ray packet. */
-static void packet_half(const sc_ray_packet16 *r, unsigned h, sc_ray_packet8 *o)
-{
-    for (unsigned i = 0; i < 8; i++) {
-        unsigned j = 8 * h + i;
-        o->ox[i] = r->ox[j], o->oy[i] = r->oy[j], o->oz[i] = r->oz[j], o->tmin[i] = r->tmin[j];
-        o->dx[i] = r->dx[j], o->dy[i] = r->dy[j], o->dz[i] = r->dz[j], o->tmax[i] = r->tmax[j];
-    }
+    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 8, hits, 0, stats);
 }
 
 sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
                              sc_hit_packet16 *hits, sc_trace_stats *stats)
 {
-    if (!bvh || !valid || !rays || !hits || !aligned_to(rays, 64) || !aligned_to(hits, 64))
-        return SC_ERR_INVALID_ARGUMENT;
-    int64_t lanes = PACKET_LANES(valid, rays, 16);
-    if (lanes < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    if (k->closest_p16) {
-        k->closest_p16(bvh, rays, (uint32_t)lanes, hits, stats);
-        return SC_OK;
-    }
-    if (k->closest_p8) {
-        for (unsigned h = 0; h < 2; h++) {
-            uint32_t hl = (uint32_t)(lanes >> (8 * h)) & 0xff;
-            if (!hl)
-                continue;
-            sc_ray_packet8 r8;
-            sc_hit_packet8 h8;
-            packet_half(rays, h, &r8);
-            k->closest_p8(bvh, &r8, hl, &h8, stats);
-            for (uint32_t e = hl; e; e &= e - 1) {
-                unsigned i = (unsigned)__builtin_ctz(e), j = 8 * h + i;
-                hits->t[j] = h8.t[i], hits->u[j] = h8.u[i], hits->v[j] = h8.v[i], hits->prim[j] = h8.prim[i];
-            }
-        }
-        return SC_OK;
-    }
-    for (unsigned i = 0; i < 16; i++) {
-        if (!((lanes >> i) & 1))
-            continue;
-        const sc_ray r = SC_RAY_OF(rays, i);
-        sc_hitrec h;
-        closest_lanes(k, bvh, &r, &h, stats);
-        hits->t[i] = h.t, hits->u[i] = h.u, hits->v[i] = h.v, hits->prim[i] = h.prim;
-    }
-    return SC_OK;
+    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 16, hits, 0, stats);
+}
+
+sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                        int32_t occluded[8], sc_trace_stats *stats)
+{
+    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 8, occluded, 1, stats);
 }
 
 sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
                          int32_t occluded[16], sc_trace_stats *stats)
 {
-    if (!bvh || !valid || !rays || !occluded || !aligned_to(rays, 64))
-        return SC_ERR_INVALID_ARGUMENT;
-    int64_t lanes = PACKET_LANES(valid, rays, 16);
-    if (lanes < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    if (k->any_p16) {
-        k->any_p16(bvh, rays, (uint32_t)lanes, occluded, stats);
-        return SC_OK;
-    }
-    if (k->any_p8) {
-        for (unsigned h = 0; h < 2; h++) {
-            uint32_t hl = (uint32_t)(lanes >> (8 * h)) & 0xff;
-            if (!hl)
-                continue;
-            sc_ray_packet8 r8;
-            int32_t o8[8];
-            packet_half(rays, h, &r8);
-            k->any_p8(bvh, &r8, hl, o8, stats);
-            for (uint32_t e = hl; e; e &= e - 1) {
-                unsigned i = (unsigned)__builtin_ctz(e);
-                occluded[8 * h + i] = o8[i];
-            }
-        }
-        return SC_OK;
-    }
-    for (unsigned i = 0; i < 16; i++) {
-        if (!((lanes >> i) & 1))
-            continue;
-        const sc_ray r = SC_RAY_OF(rays, i);
-        occluded[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
-    }
-    return SC_OK;
+    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 16, occluded, 1, stats);
 }
 
 /* ---- streams ---------------------------------------------------------------

@@ -617,23 +617,27 @@ done:
 
 /* The packet entry points: lanes = the caller's valid lanes (rays already
  * checked). Parallel rays leave the packet for the single-ray kernel. */
-static SC_TARGET void PFN(closest_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
-                                          sc_trace_stats *st)
+SC_X86_INLINE void PFN(packet_entry)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
+                                     int32_t *occluded, sc_trace_stats *st, const int ANY)
 {
     pk_ctx c;
-    uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
-    uint32_t pl = lanes & ~par;
+    const uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
+    const uint32_t pl = lanes & ~par;
     if (pl) {
         if (st)
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, st, 0, 1, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, st, 0, 1, 0);
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, st, ANY, 1, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, st, ANY, 1, 0);
         else
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, NULL, 0, 0, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, hit, NULL, &c, NULL, 0, 0, 0);
+            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, NULL, ANY, 0, 1)
+                      : PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, NULL, ANY, 0, 0);
     }
     for (uint32_t e = par; e; e &= e - 1) {
-        unsigned l = (unsigned)__builtin_ctz(e);
+        const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
+        if (ANY) {
+            occluded[l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
+            continue;
+        }
         sc_hitrec h;
         if (st)
             closest_stats_watertight(bvh, &ray, &h, st);
@@ -643,25 +647,16 @@ static SC_TARGET void PFN(closest_packet)(const sc_bvh *bvh, const PKT *r, uint3
     }
 }
 
+static SC_TARGET void PFN(closest_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
+                                          sc_trace_stats *st)
+{
+    PFN(packet_entry)(bvh, r, lanes, hit, NULL, st, 0);
+}
+
 static SC_TARGET void PFN(any_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, int32_t *occluded,
                                       sc_trace_stats *st)
 {
-    pk_ctx c;
-    uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
-    uint32_t pl = lanes & ~par;
-    if (pl) {
-        if (st)
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, st, 1, 1, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, st, 1, 1, 0);
-        else
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, NULL, 1, 0, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, NULL, occluded, &c, NULL, 1, 0, 0);
-    }
-    for (uint32_t e = par; e; e &= e - 1) {
-        unsigned l = (unsigned)__builtin_ctz(e);
-        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
-        occluded[l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
-    }
+    PFN(packet_entry)(bvh, r, lanes, NULL, occluded, st, 1);
 }
 
 #undef pvec

@@ -269,8 +269,11 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 #endif
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
-        [SC_TRI_WATERTIGHT] = { closest_watertight, any_watertight, closest_stats_watertight,         \
-                                any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT },                   \
-        [SC_TRI_MOLLER] = { closest_moller, any_moller, closest_stats_moller, any_stats_moller },     \
-        [SC_TRI_EXACT] = { closest_exact, any_exact, closest_stats_exact, any_stats_exact },          \
+        [SC_TRI_WATERTIGHT] = { .closest = closest_watertight, .any = any_watertight,                 \
+                                .closest_stats = closest_stats_watertight,                            \
+                                .any_stats = any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT },      \
+        [SC_TRI_MOLLER] = { .closest = closest_moller, .any = any_moller,                             \
+                            .closest_stats = closest_stats_moller, .any_stats = any_stats_moller },   \
+        [SC_TRI_EXACT] = { .closest = closest_exact, .any = any_exact,                                \
+                           .closest_stats = closest_stats_exact, .any_stats = any_stats_exact },      \
     }

@@ -86,9 +86,11 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
 
 /* the packet kernels below, for the kernel table */
 #if SC_X86_AVX512
-#define SC_TRACE_PACKETS_WATERTIGHT , closest_packet8, any_packet8, closest_packet16, any_packet16
+#define SC_TRACE_PACKETS_WATERTIGHT                                                                   \
+    , .closest_p8 = closest_packet8, .any_p8 = any_packet8, .closest_p16 = closest_packet16,           \
+    .any_p16 = any_packet16
 #else
-#define SC_TRACE_PACKETS_WATERTIGHT , closest_packet8, any_packet8
+#define SC_TRACE_PACKETS_WATERTIGHT , .closest_p8 = closest_packet8, .any_p8 = any_packet8
 #endif
 #include "traverse_bvh8_single.h"
 
