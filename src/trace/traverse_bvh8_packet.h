@@ -313,10 +313,13 @@ SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref,
         sc_hitrec h;
         int hit;
         if (STATS) {
-            hit = traverse_single(bvh, &ray, &h, st, ANY, 1, SC_TRI_WATERTIGHT, -1, ref);
+            hit = subtree_stats_watertight(bvh, &ray, &h, st, ref, ANY);
             st->rays--;                       /* counted once, by the packet */
+        } else if (ANY) {
+            hit = any_subtree_watertight(bvh, &ray, ref);
         } else {
-            hit = traverse_by_octant(bvh, &ray, &h, ANY, SC_TRI_WATERTIGHT, ref);
+            closest_subtree_watertight(bvh, &ray, &h, ref);
+            hit = 0;
         }
         if (ANY) {
             if (hit)

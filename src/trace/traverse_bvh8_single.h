@@ -227,6 +227,27 @@ static SC_TARGET int any_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_t
     return traverse_single(b, r, NULL, s, 1, 1, SC_TRI_WATERTIGHT, -1, 0);
 }
 
+/* The subtree traversals the packet kernels hand thin lanes to (root: the
+ * subtree's reference), out of line: one copy per ISA, not one inlined
+ * into every packet kernel. */
+static SC_TARGET __attribute__((noinline, unused)) void closest_subtree_watertight(const sc_bvh *b, const sc_ray *r,
+                                                                         sc_hitrec *h, uint64_t root)
+{
+    traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT, root);
+}
+static SC_TARGET __attribute__((noinline, unused)) int any_subtree_watertight(const sc_bvh *b, const sc_ray *r,
+                                                                    uint64_t root)
+{
+    return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT, root);
+}
+static SC_TARGET __attribute__((noinline, unused)) int subtree_stats_watertight(const sc_bvh *b, const sc_ray *r,
+                                                                      sc_hitrec *h, sc_trace_stats *s,
+                                                                      uint64_t root, int any)
+{
+    return any ? traverse_single(b, r, NULL, s, 1, 1, SC_TRI_WATERTIGHT, -1, root)
+               : traverse_single(b, r, h, s, 0, 1, SC_TRI_WATERTIGHT, -1, root);
+}
+
 static SC_TARGET void closest_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
     traverse_by_octant(b, r, h, 0, SC_TRI_MOLLER, 0);
