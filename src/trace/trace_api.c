@@ -149,25 +149,25 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
 sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
                             sc_hit_packet8 *hits, sc_trace_stats *stats)
 {
-    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 8, hits, 0, stats);
+    return trace_packet(bvh, valid, (const float *)(const void *)rays, 8, hits, 0, stats);
 }
 
 sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
                              sc_hit_packet16 *hits, sc_trace_stats *stats)
 {
-    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 16, hits, 0, stats);
+    return trace_packet(bvh, valid, (const float *)(const void *)rays, 16, hits, 0, stats);
 }
 
 sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
                         int32_t occluded[8], sc_trace_stats *stats)
 {
-    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 8, occluded, 1, stats);
+    return trace_packet(bvh, valid, (const float *)(const void *)rays, 8, occluded, 1, stats);
 }
 
 sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
                          int32_t occluded[16], sc_trace_stats *stats)
 {
-    return trace_packet(bvh, valid, rays ? rays->ox : NULL, 16, occluded, 1, stats);
+    return trace_packet(bvh, valid, (const float *)(const void *)rays, 16, occluded, 1, stats);
 }
 
 /* ---- streams ---------------------------------------------------------------
