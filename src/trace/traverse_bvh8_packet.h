@@ -42,7 +42,6 @@
 #define PFN(name) PGLUE(name, PK)
 #define PKT PGLUE(sc_ray_packet, PK)
 #define HITP PGLUE(sc_hit_packet, PK)
-#define PALL ((uint32_t)((1ull << PK) - 1))
 
 typedef PV(t) PFN(pvec);
 #define pvec PFN(pvec)
@@ -154,18 +153,18 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
         const pvec pad = PV(fmadd)(PV(abs)(rd), g, PV(fmadd)(m, PV(set1)(0x1p-124f), PV(set1)(0x1p-122f)));
         const pvec ord = PV(mul)(o[k], rd);
         PV(store)(c->rd[k], rd);
-        PV(store)(c->ordn[k], PV(add)(ord, pad));
-        PV(store)(c->ordf[k], PV(sub)(ord, pad));
+        const pvec on = PV(add)(ord, pad), of = PV(sub)(ord, pad);
+        PV(store)(c->ordn[k], on);
+        PV(store)(c->ordf[k], of);
         PV(store)(c->org[k], o[k]);
         c->neg[k] = PV(bits)(PV(lt)(d[k], PV(set1)(0))) & tl;
         {
             const PV(m) tm = PV(mask_from_bits)(tl);
-            const pvec pinf = PV(set1)(INFINITY), ninf = PV(set1)(-INFINITY);
+            const pvec pinf = PV(set1)(INFINITY);
             c->fr_rdmin[k] = PV(hmin)(PV(sel)(tm, rd, pinf));
             c->fr_rdmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), rd), pinf));
-            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), PV(add)(ord, pad)), pinf));
-            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, PV(sub)(ord, pad), pinf));
-            (void)ninf;
+            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), on), pinf));
+            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, of, pinf));
         }
         if (c->neg[k] != 0 && c->neg[k] != tl)
             c->uniform = 0;
@@ -672,4 +671,3 @@ static SC_TARGET void PFN(any_packet)(const sc_bvh *bvh, const PKT *r, uint32_t 
 #undef PFN
 #undef PKT
 #undef HITP
-#undef PALL
