@@ -18,6 +18,7 @@
 
 #include "bvh_test_util.h"
 #include "spherecull/sc_bvh.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 
 #define NRAYS 100000

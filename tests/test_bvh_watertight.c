@@ -13,6 +13,7 @@
 
 #include "bvh_test_util.h"
 #include "spherecull/sc_bvh.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 
 typedef struct closed_case {

@@ -36,6 +36,7 @@
 #include "sc_ref_ray.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 #include "trace/tri_exact.h"
 

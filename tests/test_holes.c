@@ -38,6 +38,7 @@
 #include "scene/procedural.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_scene.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 #include "trace/tri_watertight.h"
 

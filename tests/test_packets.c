@@ -24,6 +24,7 @@
 
 #include "bvh_test_util.h"
 #include "spherecull/sc_bvh.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 
 #define NPACK 600   /* packets per kind and scene */

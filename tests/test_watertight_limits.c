@@ -23,6 +23,7 @@
 
 #include "compare/crossing.h"
 #include "spherecull/sc_bvh.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 
 static const float tris[2][9] = {

@@ -37,6 +37,7 @@
 #ifndef SPHERECULL_SC_BVH_H
 #define SPHERECULL_SC_BVH_H
 
+#include "sc_api.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -94,7 +95,7 @@ typedef struct sc_bvh_info {
 
 typedef struct sc_bvh sc_bvh;
 
-void sc_bvh_config_default(sc_bvh_config *cfg);
+SC_API void sc_bvh_config_default(sc_bvh_config *cfg);
 
 /* Threads: sc_bvh_build, sc_bvh_free and sc_bvh_get_info are reentrant. Any
  * number of threads may build and free distinct BVHs at once, while others
@@ -108,16 +109,16 @@ void sc_bvh_config_default(sc_bvh_config *cfg);
  * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY.
  * Which kernels traverse the tree is not the BVH's business: the ISA level
  * (sc_isa.h) is chosen once for the whole library. */
-sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
-                       size_t triangle_count, const sc_bvh_config *cfg, sc_bvh **out);
-void sc_bvh_free(sc_bvh *bvh);
-sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
+SC_API sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
+                              size_t triangle_count, const sc_bvh_config *cfg, sc_bvh **out);
+SC_API void sc_bvh_free(sc_bvh *bvh);
+SC_API sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 
 /* "off", "circum", "minimal", "auto"; "watertight", "moller", "exact". */
-const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
-sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);
-const char *sc_tri_test_name(sc_tri_test test);
-sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out);
+SC_API const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
+SC_API sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);
+SC_API const char *sc_tri_test_name(sc_tri_test test);
+SC_API sc_status sc_tri_test_from_name(const char *name, sc_tri_test *out);
 
 #ifdef __cplusplus
 }

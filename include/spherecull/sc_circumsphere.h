@@ -32,6 +32,7 @@
 #ifndef SPHERECULL_SC_CIRCUMSPHERE_H
 #define SPHERECULL_SC_CIRCUMSPHERE_H
 
+#include "sc_api.h"
 #include <stddef.h>
 #include "sc_status.h"
 
@@ -68,11 +69,11 @@ typedef struct sc_sphered { double c[3]; double r2; } sc_sphered;
 /* Stable lower-case names ("textbook", "cramer", "projective-literal",
  * "projective-reduced"; "opposite-longest", "as-given"; "circum", "minimal")
  * and their inverse; *_from_name returns SC_ERR_INVALID_ARGUMENT if unknown. */
-const char *sc_method_name(sc_method method);
-const char *sc_origin_name(sc_origin origin);
-const char *sc_sphere_kind_name(sc_sphere_kind kind);
-sc_status sc_method_from_name(const char *name, sc_method *out);
-sc_status sc_sphere_kind_from_name(const char *name, sc_sphere_kind *out);
+SC_API const char *sc_method_name(sc_method method);
+SC_API const char *sc_origin_name(sc_origin origin);
+SC_API const char *sc_sphere_kind_name(sc_sphere_kind kind);
+SC_API sc_status sc_method_from_name(const char *name, sc_method *out);
+SC_API sc_status sc_sphere_kind_from_name(const char *name, sc_sphere_kind *out);
 
 /* Circumsphere of triangle (A, B, C).
  * On SC_OK *out holds a finite centre and r2. On any error *out is set to
@@ -80,17 +81,17 @@ sc_status sc_sphere_kind_from_name(const char *name, sc_sphere_kind *out);
  * gets a sphere that rejects nothing — never a silent NaN.
  * Errors: SC_ERR_INVALID_ARGUMENT (NULL, bad enum), SC_ERR_NONFINITE,
  * SC_ERR_DEGENERATE (|n|^2 == 0 after prescaling), SC_ERR_RANGE (overflow). */
-sc_status sc_circumsphere_f(const float A[3], const float B[3], const float C[3],
-                            sc_method method, sc_origin origin, sc_spheref *out);
-sc_status sc_circumsphere_d(const double A[3], const double B[3], const double C[3],
-                            sc_method method, sc_origin origin, sc_sphered *out);
+SC_API sc_status sc_circumsphere_f(const float A[3], const float B[3], const float C[3],
+                                   sc_method method, sc_origin origin, sc_spheref *out);
+SC_API sc_status sc_circumsphere_d(const double A[3], const double B[3], const double C[3],
+                                   sc_method method, sc_origin origin, sc_sphered *out);
 
 /* Minimal enclosing sphere. Degenerate triangles are fine (longest-edge
  * midpoint); only non-finite input or overflow fail. */
-sc_status sc_minimal_sphere_f(const float A[3], const float B[3], const float C[3],
-                              sc_method method, sc_origin origin, sc_spheref *out);
-sc_status sc_minimal_sphere_d(const double A[3], const double B[3], const double C[3],
-                              sc_method method, sc_origin origin, sc_sphered *out);
+SC_API sc_status sc_minimal_sphere_f(const float A[3], const float B[3], const float C[3],
+                                     sc_method method, sc_origin origin, sc_spheref *out);
+SC_API sc_status sc_minimal_sphere_d(const double A[3], const double B[3], const double C[3],
+                                     sc_method method, sc_origin origin, sc_sphered *out);
 
 /* Conservative prefilter sphere of the given kind (circumsphere centre, or the
  * minimal sphere's). Always fills *out with a sphere that contains the three
@@ -109,25 +110,25 @@ sc_status sc_minimal_sphere_d(const double A[3], const double B[3], const double
  * DAZ set and a subnormal coordinate in the input they return SC_ERR_RANGE
  * (the arithmetic would see another triangle) instead of a wrong sphere.
  * All functions here are reentrant: any number of threads may call them. */
-sc_status sc_prefilter_sphere_f(const float A[3], const float B[3], const float C[3],
-                                sc_sphere_kind kind, sc_method method, sc_spheref *out);
-sc_status sc_prefilter_sphere_d(const double A[3], const double B[3], const double C[3],
-                                sc_sphere_kind kind, sc_method method, sc_sphered *out);
+SC_API sc_status sc_prefilter_sphere_f(const float A[3], const float B[3], const float C[3],
+                                       sc_sphere_kind kind, sc_method method, sc_spheref *out);
+SC_API sc_status sc_prefilter_sphere_d(const double A[3], const double B[3], const double C[3],
+                                       sc_sphere_kind kind, sc_method method, sc_sphered *out);
 
 /* Pads a sphere so it contains the vertices exactly after rounding:
  * r2 = max_i fl(|V_i - c|^2) * (1 + 8u) + 16 MIN; non-finite -> +inf
  * (MIN = FLT_MIN / DBL_MIN, the smallest normal number: the pad covers the
  * underflow of both MXCSR modes, and r2 >= 16 MIN is never subnormal).
  * Exposed so SIMD kernels and other tracers can share the one rule. */
-void sc_sphere_make_conservative_f(const float A[3], const float B[3], const float C[3],
-                                   sc_spheref *sphere);
-void sc_sphere_make_conservative_d(const double A[3], const double B[3], const double C[3],
-                                   sc_sphered *sphere);
+SC_API void sc_sphere_make_conservative_f(const float A[3], const float B[3], const float C[3],
+                                          sc_spheref *sphere);
+SC_API void sc_sphere_make_conservative_d(const double A[3], const double B[3], const double C[3],
+                                          sc_sphered *sphere);
 
 /* The radius, on request: sqrt(r2) rounded up, so a sphere that contained
  * its vertices still does (+inf stays +inf). */
-float sc_sphere_radius_f(const sc_spheref *sphere);
-double sc_sphere_radius_d(const sc_sphered *sphere);
+SC_API float sc_sphere_radius_f(const sc_spheref *sphere);
+SC_API double sc_sphere_radius_d(const sc_sphered *sphere);
 
 /* ---- n-simplex hyperspheres in En, double ------------------------------- */
 
@@ -146,15 +147,15 @@ typedef enum sc_simplex_method {
     SC_SIMPLEX_METHOD_COUNT
 } sc_simplex_method;
 
-const char *sc_simplex_method_name(sc_simplex_method method);
+SC_API const char *sc_simplex_method_name(sc_simplex_method method);
 
 /* Circumscribed hypersphere of a k-simplex (k+1 vertices) in En.
  * vertices: (k+1) rows of n doubles, row-major. 2 <= n <= 16, 1 <= k <= n.
  * centre: n doubles. r2 may be NULL. On error centre is zeroed and *r2 = +inf.
  * Errors: INVALID_ARGUMENT, NONFINITE, DEGENERATE (affinely dependent
  * vertices), RANGE, UNSUPPORTED (CROSS with k < n-1). */
-sc_status sc_simplex_sphere(int n, int k, const double *vertices,
-                            sc_simplex_method method, double *centre, double *r2);
+SC_API sc_status sc_simplex_sphere(int n, int k, const double *vertices,
+                                   sc_simplex_method method, double *centre, double *r2);
 
 #ifdef __cplusplus
 }

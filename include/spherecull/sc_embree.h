@@ -31,6 +31,7 @@
 #ifndef SPHERECULL_SC_EMBREE_H
 #define SPHERECULL_SC_EMBREE_H
 
+#include "sc_api.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -66,7 +67,7 @@ typedef struct sc_embree_config {
 } sc_embree_config;
 
 /* DEFAULT mode, medium quality, clusters of 8, minimal spheres, default threads. */
-void sc_embree_config_default(sc_embree_config *cfg);
+SC_API void sc_embree_config_default(sc_embree_config *cfg);
 
 typedef struct sc_embree sc_embree;
 
@@ -95,34 +96,34 @@ typedef struct sc_embree_info {
  * trusted, not checked again). SC_ERR_INVALID_ARGUMENT for a NULL mesh or a
  * bad config, SC_ERR_UNSUPPORTED if Embree refuses the device (old CPU),
  * SC_ERR_OUT_OF_MEMORY. The mesh is copied; it need not outlive the call. */
-sc_status sc_embree_create(const sc_checked_mesh *mesh, const sc_embree_config *cfg,
-                           sc_embree **out);
-void sc_embree_destroy(sc_embree *e);
-sc_status sc_embree_get_info(const sc_embree *e, sc_embree_info *info);
+SC_API sc_status sc_embree_create(const sc_checked_mesh *mesh, const sc_embree_config *cfg,
+                                  sc_embree **out);
+SC_API void sc_embree_destroy(sc_embree *e);
+SC_API sc_status sc_embree_get_info(const sc_embree *e, sc_embree_info *info);
 
 /* rtcIntersect1 per ray: closest hit in [tmin, tmax]. */
-sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits,
-                               sc_embree_counters *counters);
+SC_API sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits,
+                                      sc_embree_counters *counters);
 
 /* rtcOccluded1 per ray: occluded[i] = 1 if anything is hit in [tmin, tmax]. */
-sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded,
-                              sc_embree_counters *counters);
+SC_API sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded,
+                                     sc_embree_counters *counters);
 
 /* rtcIntersect8 / rtcIntersect16 over consecutive groups of width rays (the
  * last group partly valid), marked coherent. width is 8 or 16. */
-sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
-                                      sc_hitrec *hits, sc_embree_counters *counters);
+SC_API sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
+                                             sc_hitrec *hits, sc_embree_counters *counters);
 /* rtcIntersect1M / rtcOccluded1M (Embree's streams) over the rays in chunks
  * of 256, with RTC_INTERSECT_CONTEXT_FLAG_COHERENT (coherent != 0) or
  * _INCOHERENT. */
-sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent,
-                                     sc_embree_counters *counters);
-sc_status sc_embree_occluded_stream(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded, int coherent,
-                                    sc_embree_counters *counters);
+SC_API sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent,
+                                            sc_embree_counters *counters);
+SC_API sc_status sc_embree_occluded_stream(sc_embree *e, const sc_ray *rays, size_t n, uint8_t *occluded, int coherent,
+                                           sc_embree_counters *counters);
 
 /* rtcOccluded8 / rtcOccluded16 likewise. */
-sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
-                                     sc_embree_counters *counters);
+SC_API sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
+                                            sc_embree_counters *counters);
 
 #ifdef __cplusplus
 }

@@ -26,6 +26,7 @@
 #ifndef SPHERECULL_SC_ISA_H
 #define SPHERECULL_SC_ISA_H
 
+#include "sc_api.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -42,26 +43,26 @@ typedef enum sc_isa {
 
 /* "scalar", "sse4", "avx2", "avx512"; inverse returns SC_ERR_INVALID_ARGUMENT
  * for an unknown name. */
-const char *sc_isa_name(sc_isa isa);
-sc_status sc_isa_from_name(const char *name, sc_isa *out);
+SC_API const char *sc_isa_name(sc_isa isa);
+SC_API sc_status sc_isa_from_name(const char *name, sc_isa *out);
 
 /* 1 if this build has the level and this CPU and OS can run it. */
-int sc_isa_supported(sc_isa isa);
+SC_API int sc_isa_supported(sc_isa isa);
 
 /* Chooses the kernel table (once; later calls return the first result).
  * SC_OK: SPHERECULL_ISA unset or honoured. SC_ERR_INVALID_ARGUMENT: unknown
  * name. SC_ERR_UNSUPPORTED: the CPU or build lacks the named level. In both
  * error cases the kernels run at the widest supported level. */
-sc_status sc_simd_init(void);
+SC_API sc_status sc_simd_init(void);
 
 /* The level the kernels run at (initializes on first call). */
-sc_isa sc_isa_active(void);
+SC_API sc_isa sc_isa_active(void);
 
 /* Switches every kernel to `isa` (for tests, benchmarks and the CLI's --isa).
  * The switch is atomic: a call running on another thread finishes with the
  * level it started with. SC_ERR_UNSUPPORTED if the CPU or build lacks it
  * (the active level is then unchanged). */
-sc_status sc_isa_force(sc_isa isa);
+SC_API sc_status sc_isa_force(sc_isa isa);
 
 #ifdef __cplusplus
 }

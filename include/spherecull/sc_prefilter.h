@@ -47,51 +47,46 @@
 #define SPHERECULL_SC_PREFILTER_H
 
 #include <stdint.h>
+#include "sc_api.h"
 #include "sc_circumsphere.h"
+#include "sc_ray.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* 32 bytes. Not an Embree RTCRay (that has `time` where this has tmax): from
- * Embree, convert with sc_ray_from_rtc (sc_rtcray.h), never cast. */
-typedef struct sc_ray {
-    float org[3];
-    float tmin;
-    float dir[3];
-    float tmax;
-} sc_ray;
-
 /* SoA sphere blocks. An empty lane has r2 < 0 and is always rejected. */
-typedef struct __attribute__((aligned(16))) sc_sphere_block4 {
-    float cx[4], cy[4], cz[4], r2[4];
+typedef struct sc_sphere_block4 {
+    SC_ALIGNAS(16) float cx[4];
+    float cy[4], cz[4], r2[4];
 } sc_sphere_block4;
-typedef struct __attribute__((aligned(32))) sc_sphere_block8 {
-    float cx[8], cy[8], cz[8], r2[8];
+typedef struct sc_sphere_block8 {
+    SC_ALIGNAS(32) float cx[8];
+    float cy[8], cz[8], r2[8];
 } sc_sphere_block8;
-typedef struct __attribute__((aligned(64))) sc_sphere_block16 {
-    float cx[16], cy[16], cz[16], r2[16];
+typedef struct sc_sphere_block16 {
+    SC_ALIGNAS(64) float cx[16];
+    float cy[16], cz[16], r2[16];
 } sc_sphere_block16;
 
-_Static_assert(sizeof(sc_ray) == 32, "sc_ray is 32 bytes");
-_Static_assert(sizeof(sc_sphere_block4) == 64, "block4 is one cache line");
-_Static_assert(sizeof(sc_sphere_block8) == 128, "block8 is two cache lines");
-_Static_assert(sizeof(sc_sphere_block16) == 256, "block16 is four cache lines");
+SC_STATIC_ASSERT(sizeof(sc_sphere_block4) == 64, "block4 is one cache line");
+SC_STATIC_ASSERT(sizeof(sc_sphere_block8) == 128, "block8 is two cache lines");
+SC_STATIC_ASSERT(sizeof(sc_sphere_block16) == 256, "block16 is four cache lines");
 
-void sc_sphere_block4_init(sc_sphere_block4 *b);
-void sc_sphere_block8_init(sc_sphere_block8 *b);
-void sc_sphere_block16_init(sc_sphere_block16 *b);
-void sc_sphere_block4_set(sc_sphere_block4 *b, int lane, const sc_spheref *s);
-void sc_sphere_block8_set(sc_sphere_block8 *b, int lane, const sc_spheref *s);
-void sc_sphere_block16_set(sc_sphere_block16 *b, int lane, const sc_spheref *s);
+SC_API void sc_sphere_block4_init(sc_sphere_block4 *b);
+SC_API void sc_sphere_block8_init(sc_sphere_block8 *b);
+SC_API void sc_sphere_block16_init(sc_sphere_block16 *b);
+SC_API void sc_sphere_block4_set(sc_sphere_block4 *b, int lane, const sc_spheref *s);
+SC_API void sc_sphere_block8_set(sc_sphere_block8 *b, int lane, const sc_spheref *s);
+SC_API void sc_sphere_block16_set(sc_sphere_block16 *b, int lane, const sc_spheref *s);
 
 /* The scalar specification of one lane: 1 = reject. */
-int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2);
+SC_API int sc_ray_sphere_reject(const sc_ray *ray, const float c[3], float r2);
 
 /* Reject masks, bit i for lane i; dispatched to the best ISA. */
-uint32_t sc_reject4(const sc_ray *ray, const sc_sphere_block4 *b);
-uint32_t sc_reject8(const sc_ray *ray, const sc_sphere_block8 *b);
-uint32_t sc_reject16(const sc_ray *ray, const sc_sphere_block16 *b);
+SC_API uint32_t sc_reject4(const sc_ray *ray, const sc_sphere_block4 *b);
+SC_API uint32_t sc_reject8(const sc_ray *ray, const sc_sphere_block8 *b);
+SC_API uint32_t sc_reject16(const sc_ray *ray, const sc_sphere_block16 *b);
 
 #ifdef __cplusplus
 }

@@ -13,10 +13,16 @@
  * centres too (no multisampling), so the ID of pixel (x, y) is what a ray
  * along sc_camera_ray_dir(cam, frame, x + 0.5, y + 0.5) sees, up to fill
  * rules on edges and depth-buffer precision.
+ *
+ * Threads: sc_raster_edge_distance and sc_raster_classify are reentrant
+ * (CPU only, their arguments only). sc_raster_render creates and makes
+ * current its own OSMesa context; call it from one thread at a time, since
+ * OSMesa's thread safety is not something this project tests.
  */
 #ifndef SPHERECULL_SC_RASTER_H
 #define SPHERECULL_SC_RASTER_H
 
+#include "sc_api.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -65,7 +71,7 @@ typedef struct sc_raster_options {
 } sc_raster_options;
 
 /* The defaults: AUTO, derived near/far, camera light, dark grey background. */
-void sc_raster_options_default(sc_raster_options *opt);
+SC_API void sc_raster_options_default(sc_raster_options *opt);
 
 typedef struct sc_raster_image {
     int width, height;
@@ -95,11 +101,11 @@ typedef struct sc_raster_image {
  *   SC_ERR_UNSUPPORTED       OSMesa could not create a context, or the
  *                            requested depth mode is not available
  *   SC_ERR_OUT_OF_MEMORY */
-sc_status sc_raster_render(const sc_raster_mesh *mesh, const sc_camera *cam,
-                           const sc_raster_options *opt, sc_raster_image *out);
+SC_API sc_status sc_raster_render(const sc_raster_mesh *mesh, const sc_camera *cam,
+                                  const sc_raster_options *opt, sc_raster_image *out);
 
 /* Frees the buffers and zeroes the struct; NULL is fine. */
-void sc_raster_image_free(sc_raster_image *img);
+SC_API void sc_raster_image_free(sc_raster_image *img);
 
 /* The half-pixel rule for classifying disagreements: a pixel whose centre
  * lies within this many pixels of a candidate triangle's projected edge is
@@ -113,9 +119,9 @@ void sc_raster_image_free(sc_raster_image *img);
  * the clip edge counts as an edge, since the rasterizer has one there too.
  * *dist_px = +inf when neither candidate has a visible part.
  * Needs no GL: also built into spherecull_raster, for the compare commands. */
-sc_status sc_raster_edge_distance(const sc_raster_mesh *mesh, const sc_camera *cam,
-                                  double near_dist, int x, int y,
-                                  uint32_t id_a, uint32_t id_b, double *dist_px);
+SC_API sc_status sc_raster_edge_distance(const sc_raster_mesh *mesh, const sc_camera *cam,
+                                         double near_dist, int x, int y,
+                                         uint32_t id_a, uint32_t id_b, double *dist_px);
 
 /* A disagreement between the ID buffer and another source (a tracer) at one
  * pixel, classified:
@@ -136,15 +142,15 @@ typedef enum sc_raster_diff {
 #define SC_RASTER_TIE_REL 0x1p-16
 
 /* "at-edge", "depth-tie", "elsewhere". */
-const char *sc_raster_diff_name(sc_raster_diff kind);
+SC_API const char *sc_raster_diff_name(sc_raster_diff kind);
 
 /* Classifies pixel (x, y) where img (rendered from this mesh and camera)
  * holds one ID and other_id (same encoding, 0 = miss) another; edge_px (may
  * be NULL) receives sc_raster_edge_distance's answer. Agreeing IDs are
  * SC_ERR_INVALID_ARGUMENT: there is nothing to classify. */
-sc_status sc_raster_classify(const sc_raster_mesh *mesh, const sc_camera *cam,
-                             const sc_raster_image *img, int x, int y, uint32_t other_id,
-                             sc_raster_diff *kind, double *edge_px);
+SC_API sc_status sc_raster_classify(const sc_raster_mesh *mesh, const sc_camera *cam,
+                                    const sc_raster_image *img, int x, int y, uint32_t other_id,
+                                    sc_raster_diff *kind, double *edge_px);
 
 #ifdef __cplusplus
 }

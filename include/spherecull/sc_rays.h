@@ -27,6 +27,11 @@
  * SC_RAYS_OFFSET times the mesh's bounding-box diagonal (towards the side the
  * primary ray came from), so no tracer is asked to resolve self-intersection
  * at t = 0 — every tracer gets the same offset origin.
+ *
+ * Threads: the generators and mesh checks read only their arguments and
+ * write only their outputs (a set's arrays are allocated per call): any
+ * number of threads may generate sets at once, also from one mesh. A set
+ * is plain memory owned by the caller.
  */
 #ifndef SPHERECULL_SC_RAYS_H
 #define SPHERECULL_SC_RAYS_H
@@ -34,7 +39,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sc_api.h"
 #include "sc_camera.h"
+#include "sc_hit.h"
 #include "sc_prefilter.h"
 #include "sc_status.h"
 
@@ -62,13 +69,6 @@ typedef struct sc_checked_mesh {
     sc_mesh_view view;
     float lo[3], hi[3];
 } sc_checked_mesh;
-
-/* One traced ray's answer; prim == SC_HITREC_MISS for a miss. 16 bytes. */
-#define SC_HITREC_MISS UINT32_MAX
-typedef struct sc_hitrec {
-    float t, u, v;
-    uint32_t prim;
-} sc_hitrec;
 
 typedef enum sc_rayset_kind {
     SC_RAYS_PRIMARY = 0,
@@ -102,46 +102,46 @@ typedef struct sc_rayset {
 
 /* Stable names "primary", "shadow", "diffuse", "random", "adversarial" and
  * "none", "vertex", "edge", "edge-back", "grazing". */
-const char *sc_rayset_kind_name(sc_rayset_kind kind);
-sc_status sc_rayset_kind_from_name(const char *name, sc_rayset_kind *out);
-const char *sc_ray_tag_name(sc_ray_tag tag);
+SC_API const char *sc_rayset_kind_name(sc_rayset_kind kind);
+SC_API sc_status sc_rayset_kind_from_name(const char *name, sc_rayset_kind *out);
+SC_API const char *sc_ray_tag_name(sc_ray_tag tag);
 
 /* Frees the arrays and zeroes the struct; NULL and zeroed sets are fine. */
-void sc_rayset_free(sc_rayset *set);
+SC_API void sc_rayset_free(sc_rayset *set);
 
 /* Checks a mesh view (non-NULL arrays, at least one vertex and triangle,
  * indices in range, finite positions) and fills *out with it and its
  * bounds. SC_ERR_INVALID_ARGUMENT / SC_ERR_NONFINITE otherwise, *out zeroed. */
-sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out);
+SC_API sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out);
 
 /* Axis-aligned bounds of the referenced vertices of an unchecked view (a
  * checked mesh carries them). */
-sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3]);
+SC_API sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3]);
 
 /* *closed = 1 iff, after welding identical positions, every edge is used by
  * exactly two triangles (degenerate triangles ignored). */
-sc_status sc_mesh_is_closed(const sc_checked_mesh *mesh, int *closed);
+SC_API sc_status sc_mesh_is_closed(const sc_checked_mesh *mesh, int *closed);
 
-sc_status sc_rayset_primary(const sc_camera *cam, sc_rayset *out);
+SC_API sc_status sc_rayset_primary(const sc_camera *cam, sc_rayset *out);
 
 /* from: the set whose hits are given (usually primary); hits: one per ray of
  * from. Misses produce no ray, so out->count <= from->count. */
-sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
-                           const sc_hitrec *hits, const float light[3], sc_rayset *out);
-sc_status sc_rayset_diffuse(const sc_checked_mesh *mesh, const sc_rayset *from,
-                            const sc_hitrec *hits, uint64_t seed, sc_rayset *out);
+SC_API sc_status sc_rayset_shadow(const sc_checked_mesh *mesh, const sc_rayset *from,
+                                  const sc_hitrec *hits, const float light[3], sc_rayset *out);
+SC_API sc_status sc_rayset_diffuse(const sc_checked_mesh *mesh, const sc_rayset *from,
+                                   const sc_hitrec *hits, uint64_t seed, sc_rayset *out);
 
 /* lo/hi: the origin box (usually the mesh bounds). count >= 1. */
-sc_status sc_rayset_random(const float lo[3], const float hi[3], size_t count, uint64_t seed,
-                           sc_rayset *out);
+SC_API sc_status sc_rayset_random(const float lo[3], const float hi[3], size_t count, uint64_t seed,
+                                  sc_rayset *out);
 
 /* count >= 1; the mesh needs at least one non-degenerate triangle. */
-sc_status sc_rayset_adversarial(const sc_checked_mesh *mesh, size_t count, uint64_t seed,
-                                sc_rayset *out);
+SC_API sc_status sc_rayset_adversarial(const sc_checked_mesh *mesh, size_t count, uint64_t seed,
+                                       sc_rayset *out);
 
 /* A camera that frames the mesh's bounding box from the +z/+y diagonal
  * (used when a scene brings no camera). */
-sc_status sc_camera_for_mesh(const sc_checked_mesh *mesh, int width, int height, sc_camera *cam);
+SC_API sc_status sc_camera_for_mesh(const sc_checked_mesh *mesh, int width, int height, sc_camera *cam);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
 #ifndef SPHERECULL_SC_RENDER_H
 #define SPHERECULL_SC_RENDER_H
 
+#include "sc_api.h"
 #include <stdint.h>
 
 #include "sc_bvh.h"
@@ -52,17 +53,17 @@ typedef struct sc_render_stats {
 } sc_render_stats;
 
 /* Defaults: shaded, no AO, seed 1, all threads, shadows on. */
-void sc_render_options_init(sc_render_options *opt);
+SC_API void sc_render_options_init(sc_render_options *opt);
 
 /* "shaded", "normals", "depth", "id", "heat". */
-const char *sc_render_debug_name(sc_render_debug debug);
-sc_status sc_render_debug_from_name(const char *name, sc_render_debug *out);
+SC_API const char *sc_render_debug_name(sc_render_debug debug);
+SC_API sc_status sc_render_debug_from_name(const char *name, sc_render_debug *out);
 
 /* Renders view (camera, lights, colours) traced through bvh, which must have
  * been built from view's positions and indices (hit.prim indexes them).
  * out is allocated here (free with sc_image_free). stats may be NULL. */
-sc_status sc_render(const sc_scene_view *view, const sc_bvh *bvh, const sc_render_options *opt,
-                    sc_image *out, sc_render_stats *stats);
+SC_API sc_status sc_render(const sc_scene_view *view, const sc_bvh *bvh, const sc_render_options *opt,
+                           sc_image *out, sc_render_stats *stats);
 
 #ifdef __cplusplus
 }

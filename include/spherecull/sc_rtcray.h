@@ -15,6 +15,8 @@
  * Embree's ray `time` (motion blur) has no counterpart: a prefilter sphere
  * bounds a static triangle. tests/test_rtcray.c checks the offsets stated
  * here against embree3/rtcore_ray.h (built when CMake finds Embree).
+ *
+ * Threads: inline conversions of the caller's structs; no shared state.
  */
 #ifndef SPHERECULL_SC_RTCRAY_H
 #define SPHERECULL_SC_RTCRAY_H

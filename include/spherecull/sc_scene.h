@@ -37,10 +37,19 @@
  *
  * Warnings go to options->warn (the library never prints); at most
  * SC_SCENE_MAX_WARNINGS are forwarded per load, then one summary line.
+ *
+ * Threads: sc_scene_load, sc_scene_load_json_text, sc_scene_create and
+ * sc_scene_free are reentrant: distinct scenes may be loaded in several
+ * threads at once (assimp imports in this process are serialised by a lock
+ * inside). One scene may be read by many threads at once (sc_scene_get_view,
+ * sc_scene_get_stats and the arrays of a view); a call that changes it
+ * (sc_scene_add_*, sc_scene_set_*, sc_scene_frame_camera) must not overlap
+ * any other call on the same scene.
  */
 #ifndef SPHERECULL_SC_SCENE_H
 #define SPHERECULL_SC_SCENE_H
 
+#include "sc_api.h"
 #include <stddef.h>
 #include <stdint.h>
 
@@ -128,55 +137,55 @@ typedef struct sc_scene_stats {
 } sc_scene_stats;
 
 /* Defaults: every field zero/NULL except seed = 1. */
-void sc_scene_options_init(sc_scene_options *options);
+SC_API void sc_scene_options_init(sc_scene_options *options);
 
 /* Loads a scene (see the top of this file for spec). options may be NULL.
  * On failure *out is NULL and err (if errlen > 0) holds one line without a
  * trailing newline. */
-sc_status sc_scene_load(const char *spec, const sc_scene_options *options,
-                        sc_scene **out, char *err, size_t errlen);
+SC_API sc_status sc_scene_load(const char *spec, const sc_scene_options *options,
+                               sc_scene **out, char *err, size_t errlen);
 
 /* A scene description from memory: text (len bytes, need not be
  * NUL-terminated) in the "*.json" format. Relative mesh paths resolve
  * against base_dir (NULL: the current directory); name labels messages
  * (NULL: "<memory>"). Same contract as sc_scene_load. */
-sc_status sc_scene_load_json_text(const char *text, size_t len, const char *name,
-                                  const char *base_dir, const sc_scene_options *options,
-                                  sc_scene **out, char *err, size_t errlen);
+SC_API sc_status sc_scene_load_json_text(const char *text, size_t len, const char *name,
+                                         const char *base_dir, const sc_scene_options *options,
+                                         sc_scene **out, char *err, size_t errlen);
 
 /* An empty scene for raw buffers: no triangles, default camera, no lights.
  * The options (cap, warning callback) are copied and apply to later calls. */
-sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out);
+SC_API sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out);
 
 /* Appends one mesh; color may be NULL (default grey). Indices must be
  * < num_vertices. Triangles touching a non-finite vertex are dropped with a
  * warning. Returns SC_ERR_LIMIT, leaving the scene unchanged, when the
  * counts would exceed the cap: checked on num_vertices and num_triangles
  * before either buffer is read. */
-sc_status sc_scene_add_mesh(sc_scene *scene, const float *positions, size_t num_vertices,
-                            const uint32_t *indices, size_t num_triangles,
-                            const float color[3], char *err, size_t errlen);
+SC_API sc_status sc_scene_add_mesh(sc_scene *scene, const float *positions, size_t num_vertices,
+                                   const uint32_t *indices, size_t num_triangles,
+                                   const float color[3], char *err, size_t errlen);
 
-sc_status sc_scene_add_light(sc_scene *scene, const sc_light *light);
-sc_status sc_scene_set_camera(sc_scene *scene, const sc_camera *camera);
-sc_status sc_scene_set_background(sc_scene *scene, const float rgb[3]);
+SC_API sc_status sc_scene_add_light(sc_scene *scene, const sc_light *light);
+SC_API sc_status sc_scene_set_camera(sc_scene *scene, const sc_camera *camera);
+SC_API sc_status sc_scene_set_background(sc_scene *scene, const float rgb[3]);
 
 /* Points the camera at the scene's bounding box from the given azimuth and
  * elevation (degrees, y up), with vertical fov fov_y_deg and the given image
  * size, far enough that the whole box is in view. */
-sc_status sc_scene_frame_camera(sc_scene *scene, double azimuth_deg, double elevation_deg,
-                                double fov_y_deg, int width, int height);
+SC_API sc_status sc_scene_frame_camera(sc_scene *scene, double azimuth_deg, double elevation_deg,
+                                       double fov_y_deg, int width, int height);
 
 /* Adds a white directional key light from above-left of the current camera. */
-sc_status sc_scene_add_default_light(sc_scene *scene);
+SC_API sc_status sc_scene_add_default_light(sc_scene *scene);
 
-sc_status sc_scene_get_view(const sc_scene *scene, sc_scene_view *view);
-sc_status sc_scene_get_stats(const sc_scene *scene, sc_scene_stats *stats);
+SC_API sc_status sc_scene_get_view(const sc_scene *scene, sc_scene_view *view);
+SC_API sc_status sc_scene_get_stats(const sc_scene *scene, sc_scene_stats *stats);
 
 /* Where "cache:NAME" points: writes the directory into buf. */
-sc_status sc_scene_mesh_cache_dir(const sc_scene_options *options, char *buf, size_t buflen);
+SC_API sc_status sc_scene_mesh_cache_dir(const sc_scene_options *options, char *buf, size_t buflen);
 
-void sc_scene_free(sc_scene *scene);
+SC_API void sc_scene_free(sc_scene *scene);
 
 #ifdef __cplusplus
 }

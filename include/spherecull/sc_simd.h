@@ -48,9 +48,11 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "sc_api.h"
 #include "sc_circumsphere.h"
 #include "sc_isa.h"
 #include "sc_prefilter.h"
+#include "sc_ray.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -68,11 +70,11 @@ typedef enum sc_batch_kind {
 } sc_batch_kind;
 
 /* "circum", "minimal", "prefilter-circum", "prefilter-minimal". */
-const char *sc_batch_kind_name(sc_batch_kind kind);
-sc_status sc_batch_kind_from_name(const char *name, sc_batch_kind *out);
+SC_API const char *sc_batch_kind_name(sc_batch_kind kind);
+SC_API sc_status sc_batch_kind_from_name(const char *name, sc_batch_kind *out);
 
 /* count rounded up to a multiple of 16 (the length every output array needs). */
-size_t sc_simd_padded(size_t count);
+SC_API size_t sc_simd_padded(size_t count);
 
 typedef struct sc_spheres_soaf { float *cx, *cy, *cz, *r2; } sc_spheres_soaf;
 typedef struct sc_spheres_soad { double *cx, *cy, *cz, *r2; } sc_spheres_soad;
@@ -87,34 +89,25 @@ typedef struct sc_triangles_soad { const double *x[3], *y[3], *z[3]; } sc_triang
  * enum, or any index >= vertex_count (all other triangles are still
  * computed; those get r2 = +inf); SC_ERR_LIMIT for too many vertices. */
 #define SC_SIMD_MAX_VERTICES ((size_t)0x2aaaaaaa)   /* 3 * count fits an int32 offset */
-sc_status sc_spheres_indexed_f(const float *vertices, size_t vertex_count, const uint32_t *indices,
-                               size_t triangle_count, sc_method method, sc_batch_kind kind,
-                               const sc_spheres_soaf *out);
-sc_status sc_spheres_indexed_d(const double *vertices, size_t vertex_count, const uint32_t *indices,
-                               size_t triangle_count, sc_method method, sc_batch_kind kind,
-                               const sc_spheres_soad *out);
-sc_status sc_spheres_soa_f(const sc_triangles_soaf *triangles, size_t triangle_count,
-                           sc_method method, sc_batch_kind kind, const sc_spheres_soaf *out);
-sc_status sc_spheres_soa_d(const sc_triangles_soad *triangles, size_t triangle_count,
-                           sc_method method, sc_batch_kind kind, const sc_spheres_soad *out);
+SC_API sc_status sc_spheres_indexed_f(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                      size_t triangle_count, sc_method method, sc_batch_kind kind,
+                                      const sc_spheres_soaf *out);
+SC_API sc_status sc_spheres_indexed_d(const double *vertices, size_t vertex_count, const uint32_t *indices,
+                                      size_t triangle_count, sc_method method, sc_batch_kind kind,
+                                      const sc_spheres_soad *out);
+SC_API sc_status sc_spheres_soa_f(const sc_triangles_soaf *triangles, size_t triangle_count,
+                                  sc_method method, sc_batch_kind kind, const sc_spheres_soaf *out);
+SC_API sc_status sc_spheres_soa_d(const sc_triangles_soad *triangles, size_t triangle_count,
+                                  sc_method method, sc_batch_kind kind, const sc_spheres_soad *out);
 
 /* ---- one sphere against a packet of rays ---------------------------------- */
 
-/* SoA ray packets; lane i is the sc_ray (org, tmin, dir, tmax). */
-typedef struct __attribute__((aligned(32))) sc_ray_packet8 {
-    float ox[8], oy[8], oz[8], tmin[8], dx[8], dy[8], dz[8], tmax[8];
-} sc_ray_packet8;
-typedef struct __attribute__((aligned(64))) sc_ray_packet16 {
-    float ox[16], oy[16], oz[16], tmin[16], dx[16], dy[16], dz[16], tmax[16];
-} sc_ray_packet16;
-_Static_assert(sizeof(sc_ray_packet8) == 256, "packet8 is four cache lines");
-_Static_assert(sizeof(sc_ray_packet16) == 512, "packet16 is eight cache lines");
-
+/* The packets sc_ray_packet8/16 are in sc_ray.h. */
 /* Bit i set iff sc_ray_sphere_reject(ray i, c, r2) would reject: the same
  * conservative test, lane for lane and bit for bit. 0 if an argument is NULL
  * (rejecting nothing is always safe). */
-uint32_t sc_reject_packet8(const sc_ray_packet8 *rays, const float c[3], float r2);
-uint32_t sc_reject_packet16(const sc_ray_packet16 *rays, const float c[3], float r2);
+SC_API uint32_t sc_reject_packet8(const sc_ray_packet8 *rays, const float c[3], float r2);
+SC_API uint32_t sc_reject_packet16(const sc_ray_packet16 *rays, const float c[3], float r2);
 
 #ifdef __cplusplus
 }

@@ -3,10 +3,14 @@
  * Every public function that can fail returns an sc_status; 0 is success.
  * The library never aborts, exits or prints: the caller decides what an
  * error means (the CLI turns it into one line on stderr and a non-zero exit).
+ *
+ * Threads: sc_strerror returns static strings and may be called from any
+ * thread at any time.
  */
 #ifndef SPHERECULL_SC_STATUS_H
 #define SPHERECULL_SC_STATUS_H
 
+#include "sc_api.h"
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -26,7 +30,7 @@ typedef enum sc_status {
 } sc_status;
 
 /* A short English description; never NULL, also for out-of-range values. */
-const char *sc_strerror(sc_status status);
+SC_API const char *sc_strerror(sc_status status);
 
 #ifdef __cplusplus
 }

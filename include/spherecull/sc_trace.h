@@ -73,13 +73,13 @@
 #ifndef SPHERECULL_SC_TRACE_H
 #define SPHERECULL_SC_TRACE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
+#include "sc_api.h"
 #include "sc_bvh.h"
-#include "sc_isa.h"
-#include "sc_prefilter.h"
-#include "sc_rays.h"
-#include "sc_simd.h"
+#include "sc_hit.h"
+#include "sc_ray.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -99,22 +99,22 @@ typedef struct sc_trace_stats {
 /* Closest hit. Errors: INVALID_ARGUMENT for NULL pointers or a ray with a
  * NaN/infinite direction, a zero direction, an origin coordinate of
  * magnitude >= 1e18 (or NaN), tmin < 0 or NaN, or NaN tmax. */
-sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
-                           sc_trace_stats *stats);
+SC_API sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
+                                  sc_trace_stats *stats);
 
 /* Any hit in [tmin, tmax]: *occluded = 1 if one exists, else 0. */
-sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded,
-                       sc_trace_stats *stats);
+SC_API sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded,
+                              sc_trace_stats *stats);
 
 /* Brute force over all triangles with the BVH's own triangle test and
  * precision: no tree, for debugging and as a same-arithmetic cross-check.
  * (With SC_TRI_EXACT the decisions are the same as sc_trace_closest's; of
  * exact ties another triangle may be reported.) */
-sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
+SC_API sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
 
 /* ---- packets ---------------------------------------------------------------
  *
- *   sc_ray_packet16 rays;      // SoA, 64-byte aligned (sc_simd.h): lane i is a ray
+ *   sc_ray_packet16 rays;      // SoA, 64-byte aligned (sc_ray.h): lane i is a ray
  *   sc_hit_packet16 hits;      // 64-byte aligned
  *   int32_t valid[16];         // non-zero: trace lane i (like rtcIntersect16)
  *   sc_trace_closest16(bvh, valid, &rays, &hits, NULL);
@@ -141,23 +141,14 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
  * triangle counters count per ray, as for single rays (a triangle tested
  * against 16 active lanes is 16 tests, a sphere culled for them 16 rejects).
  * Threads: as the single-ray calls. */
-typedef struct __attribute__((aligned(32))) sc_hit_packet8 {
-    float t[8], u[8], v[8];
-    uint32_t prim[8];
-} sc_hit_packet8;
-typedef struct __attribute__((aligned(64))) sc_hit_packet16 {
-    float t[16], u[16], v[16];
-    uint32_t prim[16];
-} sc_hit_packet16;
-
-sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
-                            sc_hit_packet8 *hits, sc_trace_stats *stats);
-sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
-                             sc_hit_packet16 *hits, sc_trace_stats *stats);
-sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
-                        int32_t occluded[8], sc_trace_stats *stats);
-sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
-                         int32_t occluded[16], sc_trace_stats *stats);
+SC_API sc_status sc_trace_closest8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                                   sc_hit_packet8 *hits, sc_trace_stats *stats);
+SC_API sc_status sc_trace_closest16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                                    sc_hit_packet16 *hits, sc_trace_stats *stats);
+SC_API sc_status sc_trace_any8(const sc_bvh *bvh, const int32_t valid[8], const sc_ray_packet8 *rays,
+                               int32_t occluded[8], sc_trace_stats *stats);
+SC_API sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ray_packet16 *rays,
+                                int32_t occluded[16], sc_trace_stats *stats);
 
 /* ---- streams ---------------------------------------------------------------
  *
@@ -173,10 +164,10 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
  * of the single-ray calls, bit for bit.
  * flags: 0 (reserved). A ray sc_trace_closest would refuse gets no result
  * and makes the call return INVALID_ARGUMENT after tracing the others. */
-sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
-                             size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *stats);
-sc_status sc_trace_any_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
-                         size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *stats);
+SC_API sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
+                                    size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *stats);
+SC_API sc_status sc_trace_any_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
+                                size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *stats);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
 #include "common/sc_names.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_image.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_render.h"
 #include "spherecull/sc_scene.h"
 

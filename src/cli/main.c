@@ -3,11 +3,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "cli.h"
+#include <spherecull/sc_version.h>
 
-#ifndef SPHERECULL_VERSION
-#error "SPHERECULL_VERSION comes from project(VERSION) in CMakeLists.txt"
-#endif
+#include "cli.h"
 
 static const sc_cli_cmd *const commands[] = {
     &sc_cli_accuracy, &sc_cli_bench, &sc_cli_bench_spheres, &sc_cli_compare,
@@ -40,7 +38,7 @@ int main(int argc, char **argv)
     }
     const char *a = argv[1];
     if (strcmp(a, "--version") == 0 || strcmp(a, "-V") == 0) {
-        printf("spherecull %s\n", SPHERECULL_VERSION);
+        printf("spherecull %s\n", sc_version_string());
         return 0;
     }
     if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0 || strcmp(a, "help") == 0) {
