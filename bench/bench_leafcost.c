@@ -84,7 +84,7 @@ int main(int argc, char **argv)
             cfg.leaf_size = W;
             cfg.prefilter = c == 0 ? SC_PREFILTER_OFF : SC_PREFILTER_MINIMAL;
             sc_bvh *b;
-            if (sc_bvh_build(pos, (size_t)(3 * W), idx, (size_t)W, &cfg, &b) != SC_OK) {
+            if (sc_bvh_build(&(sc_mesh_view){ pos, (size_t)(3 * W), idx, (size_t)W, 0, 0 }, &cfg, &b) != SC_OK) {
                 fprintf(stderr, "bench_leafcost: build failed\n");
                 return 1;
             }

@@ -5,7 +5,8 @@
  *   sc_bvh_config cfg;
  *   sc_bvh_config_default(&cfg);
  *   sc_bvh *bvh;
- *   if (sc_bvh_build(positions, nverts, indices, ntris, &cfg, &bvh) != SC_OK) ...
+ *   sc_mesh_view mesh = { positions, nverts, indices, ntris, 0, 0 };   // strides 0: packed
+ *   if (sc_bvh_build(&mesh, &cfg, &bvh) != SC_OK) ...
  *   sc_ray ray = { {0, 0, -5}, 0.0f, {0, 0, 1}, INFINITY };
  *   sc_hitrec hit;
  *   sc_trace_closest(bvh, &ray, &hit, NULL);
@@ -28,6 +29,7 @@
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_ray.h"
 #include "spherecull/sc_hit.h"
+#include "spherecull/sc_mesh.h"
 #include "spherecull/sc_circumsphere.h"
 #include "spherecull/sc_prefilter.h"
 #include "spherecull/sc_simd.h"

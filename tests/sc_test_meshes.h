@@ -142,7 +142,7 @@ static void each_shared_scene(const char *const *names, size_t count,
         assert_int_equal(sc_scene_load(path, NULL, &scene, err, sizeof err), SC_OK);
         sc_scene_view v;
         assert_int_equal(sc_scene_get_view(scene, &v), SC_OK);
-        sc_mesh_view m = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
+        sc_mesh_view m = { v.mesh.positions, (uint32_t)v.mesh.vertex_count, v.mesh.indices, (uint32_t)v.mesh.triangle_count, 0, 0 };
         fn(names[f], &m, ctx);
         sc_scene_free(scene);
         ran++;

@@ -98,6 +98,29 @@ typedef struct check_result {
     double max_terr;      /* max |t - t_oracle| / tol */
 } check_result;
 
+/* The reported geometric normal against (V1 - V0) x (V2 - V0) in double
+ * from the mesh: the float computation rounds e1, e2, the products and the
+ * differences, each by at most 2^-24 relative, so every component is within
+ * 2^-20 |e1| |e2| of the double one. */
+static int normal_ok(const tmesh *m, uint32_t prim, const float ng[3])
+{
+    const float *v[3];
+    for (int j = 0; j < 3; j++)
+        v[j] = m->pos + 3 * (size_t)m->idx[3 * (size_t)prim + j];
+    double e1[3], e2[3], n[3];
+    for (int k = 0; k < 3; k++)
+        e1[k] = (double)v[1][k] - v[0][k], e2[k] = (double)v[2][k] - v[0][k];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double tol = 0x1p-20 * sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]) *
+                       sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+    for (int k = 0; k < 3; k++)
+        if (!(fabs(ng[k] - n[k]) <= tol))
+            return 0;
+    return 1;
+}
+
 static void check_against_oracle(const scene_case *sc, const sc_hitrec *h, check_result *res, const char *what)
 {
     memset(res, 0, sizeof *res);
@@ -106,11 +129,14 @@ static void check_against_oracle(const scene_case *sc, const sc_hitrec *h, check
         const sc_ray *ray = &sc->rays[i];
         int ok = 1;
         if (h[i].prim == SC_HITREC_MISS) {
-            ok = isinf(o->t_robust);
+            ok = isinf(o->t_robust) && h[i].geom == SC_INVALID_ID && h[i].inst == SC_INVALID_ID &&
+                 h[i].ng[0] == 0 && h[i].ng[1] == 0 && h[i].ng[2] == 0;
         } else {
             res->hits++;
+            ok = h[i].geom == 0 && h[i].inst == SC_INVALID_ID && h[i].prim < sc->m.nt &&
+                 normal_ok(&sc->m, h[i].prim, h[i].ng);
             double tp, tol = h[i].prim < sc->orc.n ? oracle_tri(&sc->orc, h[i].prim, ray, &tp) : -1;
-            if (tol < 0 || !(fabs(h[i].t - tp) <= tol)) {
+            if (!ok || tol < 0 || !(fabs(h[i].t - tp) <= tol)) {
                 ok = 0;
             } else {
                 double e = tol > 0 ? fabs(h[i].t - tp) / tol : 0;
@@ -143,7 +169,7 @@ static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, int isa, 
         assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
     cfg.tri_test = tt;
     sc_bvh *bvh = NULL;
-    assert_int_equal(sc_bvh_build(m->pos, m->nv, m->idx, m->nt, &cfg, &bvh), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ m->pos, m->nv, m->idx, m->nt, 0, 0 }, &cfg, &bvh), SC_OK);
     assert_non_null(bvh);
     return bvh;
 }
@@ -371,21 +397,21 @@ static void test_api(void **state)
     sc_bvh *b = (sc_bvh *)1;
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
-    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, NULL), SC_ERR_INVALID_ARGUMENT);
-    assert_int_equal(sc_bvh_build(NULL, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ NULL, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
     assert_null(b);
-    assert_int_equal(sc_bvh_build(pos, 3, bad_idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, bad_idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
     cfg.leaf_size = 0;
-    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
     cfg.leaf_size = 17;
-    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
     sc_bvh_config_default(&cfg);
     cfg.prefilter = SC_PREFILTER_MODE_COUNT;
-    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
 
     /* Empty scene: every ray misses. */
     sc_bvh_config_default(&cfg);
-    assert_int_equal(sc_bvh_build(NULL, 0, NULL, 0, &cfg, &b), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ NULL, 0, NULL, 0, 0, 0 }, &cfg, &b), SC_OK);
     sc_ray ray = { { 0.25f, 0.25f, -1 }, 0, { 0, 0, 1 }, INFINITY };
     sc_hitrec h;
     int occ = 7;
@@ -396,7 +422,7 @@ static void test_api(void **state)
     sc_bvh_free(b);
 
     /* One triangle, hit in the middle; both faces; bad rays rejected. */
-    assert_int_equal(sc_bvh_build(pos, 3, idx, 1, &cfg, &b), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_OK);
     assert_int_equal(sc_trace_closest(b, &ray, &h, NULL), SC_OK);
     assert_int_equal(h.prim, 0);
     assert_true(fabsf(h.t - 1) < 1e-6f && fabsf(h.u - 0.25f) < 1e-6f && fabsf(h.v - 0.25f) < 1e-6f);
@@ -422,7 +448,7 @@ static void test_api(void **state)
     /* A triangle with a non-finite vertex is left out. */
     float posn[12] = { 0, 0, 0, 1, 0, 0, 0, 1, 0, INFINITY, 0, 0 };
     uint32_t idx2[6] = { 0, 1, 2, 0, 1, 3 };
-    assert_int_equal(sc_bvh_build(posn, 4, idx2, 2, &cfg, &b), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ posn, 4, idx2, 2, 0, 0 }, &cfg, &b), SC_OK);
     sc_bvh_info info;
     assert_int_equal(sc_bvh_get_info(b, &info), SC_OK);
     assert_int_equal(info.triangles, 1);
@@ -433,6 +459,76 @@ static void test_api(void **state)
     assert_int_equal(sc_prefilter_mode_from_name("minimal", &m), SC_OK);
     assert_int_equal(m, SC_PREFILTER_MINIMAL);
     assert_int_equal(sc_prefilter_mode_from_name("bogus", &m), SC_ERR_INVALID_ARGUMENT);
+}
+
+/* The same soup given as float4 vertices (w = NaN, which must never be
+ * read) and index quads (a fourth index out of range, never read either):
+ * the tree built through the strided view answers every ray bit for bit as
+ * the packed one, for each triangle test; bad layouts are refused. */
+static void test_strided_layout(void **state)
+{
+    (void)state;
+    scene_case sc = { .name = "soup-strided" };
+    scene_soup(&sc.m, 2000, 0, 1);
+    make_rays(&sc, NRAYS, 23);
+    float (*v4)[4] = malloc(sizeof *v4 * sc.m.nv);
+    uint32_t (*i4)[4] = malloc(sizeof *i4 * sc.m.nt);
+    assert_non_null(v4);
+    assert_non_null(i4);
+    for (uint32_t i = 0; i < sc.m.nv; i++) {
+        memcpy(v4[i], sc.m.pos + 3 * (size_t)i, 3 * sizeof(float));
+        v4[i][3] = NAN;
+    }
+    for (uint32_t t = 0; t < sc.m.nt; t++) {
+        memcpy(i4[t], sc.m.idx + 3 * (size_t)t, 3 * sizeof(uint32_t));
+        i4[t][3] = UINT32_MAX;
+    }
+    const sc_mesh_view packed = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
+    const sc_mesh_view strided = { &v4[0][0], sc.m.nv, &i4[0][0], sc.m.nt, sizeof v4[0], sizeof i4[0] };
+    sc_hitrec *ha = malloc(sizeof *ha * sc.nrays), *hb = malloc(sizeof *hb * sc.nrays);
+    assert_non_null(ha);
+    assert_non_null(hb);
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.tri_test = (sc_tri_test)tt;
+        cfg.prefilter = SC_PREFILTER_MINIMAL;
+        sc_bvh *a = NULL, *b = NULL;
+        assert_int_equal(sc_bvh_build(&packed, &cfg, &a), SC_OK);
+        assert_int_equal(sc_bvh_build(&strided, &cfg, &b), SC_OK);
+        trace_all(a, &sc, ha);
+        trace_all(b, &sc, hb);
+        size_t hits = 0;
+        for (size_t i = 0; i < sc.nrays; i++) {
+            assert_true(same_hit(&ha[i], &hb[i]));
+            hits += ha[i].prim != SC_HITREC_MISS;
+        }
+        assert_true(hits > sc.nrays / 10);     /* the comparison saw hits */
+        sc_bvh_free(a);
+        sc_bvh_free(b);
+    }
+    /* The checked mesh of the strided view has the packed view's bounds. */
+    sc_checked_mesh ca, cb;
+    assert_int_equal(sc_mesh_check(&packed, &ca), SC_OK);
+    assert_int_equal(sc_mesh_check(&strided, &cb), SC_OK);
+    assert_memory_equal(ca.lo, cb.lo, sizeof ca.lo);
+    assert_memory_equal(ca.hi, cb.hi, sizeof ca.hi);
+
+    sc_bvh *b = (sc_bvh *)1;
+    sc_mesh_view bad = strided;
+    bad.vertex_stride = 8;                       /* overlapping vertices */
+    assert_int_equal(sc_bvh_build(&bad, NULL, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_null(b);
+    assert_int_equal(sc_mesh_check(&bad, &cb), SC_ERR_INVALID_ARGUMENT);
+    bad = strided;
+    bad.index_stride = 13;                       /* not a multiple of 4 */
+    assert_int_equal(sc_bvh_build(&bad, NULL, &b), SC_ERR_INVALID_ARGUMENT);
+    bad = strided;
+    bad.positions = (const float *)(const void *)((const char *)strided.positions + 2);   /* misaligned */
+    assert_int_equal(sc_bvh_build(&bad, NULL, &b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_bvh_build(NULL, NULL, &b), SC_ERR_INVALID_ARGUMENT);
+    free(ha), free(hb), free(v4), free(i4);
+    scene_free(&sc);
 }
 
 int main(void)
@@ -447,6 +543,7 @@ int main(void)
         cmocka_unit_test(test_offset),
         cmocka_unit_test(test_moller),
         cmocka_unit_test(test_bunny),
+        cmocka_unit_test(test_strided_layout),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

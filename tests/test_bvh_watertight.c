@@ -85,7 +85,7 @@ static void run_case(const closed_case *cc)
                     assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                     cfg.tri_test = (sc_tri_test)tt;
                     sc_bvh *b;
-                    assert_int_equal(sc_bvh_build(m.pos, m.nv, m.idx, m.nt, &cfg, &b), SC_OK);
+                    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ m.pos, m.nv, m.idx, m.nt, 0, 0 }, &cfg, &b), SC_OK);
                     size_t holes = 0, any_holes = 0;
                     for (size_t i = 0; i < n; i++) {
                         sc_hitrec h;

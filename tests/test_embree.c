@@ -16,6 +16,7 @@
 #include "sc_test_checked.h"
 #include "scene/procedural.h"
 #include "spherecull/sc_embree.h"
+#include "spherecull/sc_trace.h"
 
 static sc_embree *make(const sc_checked_mesh *m, sc_embree_mode mode, int cluster, sc_embree_quality q)
 {
@@ -74,8 +75,15 @@ static void test_native_matches_oracle_away_from_edges(void **state)
     sc_ray *rays = interior_rays(&pm, N, 3, target);
     sc_oracle o;
     assert_int_equal(sc_oracle_run(&m, rays, N, 2, 0, &o), SC_OK);
-    sc_hitrec *h = malloc(N * sizeof *h);
+    sc_hitrec *h = malloc(N * sizeof *h), *ours = malloc(N * sizeof *ours);
     uint8_t *occ = malloc(N);
+    /* Our tracer's hits on the same rays: the normals must agree with
+     * Embree's Ng (the same convention, (V1 - V0) x (V2 - V0)). */
+    sc_bvh *bvh = NULL;
+    assert_int_equal(sc_bvh_build(&mv, NULL, &bvh), SC_OK);
+    for (size_t i = 0; i < N; i++)
+        assert_int_equal(sc_trace_closest(bvh, &rays[i], &ours[i], NULL), SC_OK);
+    sc_bvh_free(bvh);
     const sc_embree_mode modes[] = { SC_EMBREE_DEFAULT, SC_EMBREE_ROBUST, SC_EMBREE_USER_PREFILTER,
                                      SC_EMBREE_USER_PLAIN };
     for (int mi = 0; mi < 4; mi++)
@@ -88,6 +96,14 @@ static void test_native_matches_oracle_away_from_edges(void **state)
                 assert_int_equal(o.hits[i].ties[0], target[i]);   /* the sphere is convex */
                 assert_int_equal(h[i].prim, target[i]);
                 assert_true(fabs(h[i].t - o.hits[i].t) <= 1e-5 * o.hits[i].t);
+                assert_int_equal(ours[i].prim, target[i]);
+                const float *a = h[i].ng, *b = ours[i].ng;
+                const double nb = sqrt((double)b[0] * b[0] + (double)b[1] * b[1] + (double)b[2] * b[2]);
+                assert_true(nb > 0);
+                for (int k = 0; k < 3; k++)
+                    assert_true(fabs((double)a[k] - b[k]) <= 1e-5 * nb);
+                assert_int_equal(h[i].geom, 0);
+                assert_int_equal(h[i].inst, SC_INVALID_ID);
             }
             assert_int_equal(sc_embree_occluded1(e, rays, N, occ, NULL), SC_OK);
             for (size_t i = 0; i < N; i++)
@@ -95,7 +111,7 @@ static void test_native_matches_oracle_away_from_edges(void **state)
             sc_embree_destroy(e);
         }
     sc_oracle_free(&o);
-    free(h), free(occ), free(rays), free(target);
+    free(h), free(ours), free(occ), free(rays), free(target);
     sc_proc_free(&pm);
 }
 

@@ -350,7 +350,7 @@ static void test_tiny_scenes(void **state)
                 assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
                 cfg.tri_test = tt ? SC_TRI_WATERTIGHT : SC_TRI_EXACT;
                 sc_bvh *b;
-                assert_int_equal(sc_bvh_build(&c.v[0][0], 3 * (size_t)c.n, idx, (size_t)c.n, &cfg, &b), SC_OK);
+                assert_int_equal(sc_bvh_build(&(sc_mesh_view){ &c.v[0][0], 3 * (size_t)c.n, idx, (size_t)c.n, 0, 0 }, &cfg, &b), SC_OK);
                 sc_hitrec h;
                 int occ;
                 assert_int_equal(sc_trace_closest(b, &c.ray, &h, NULL), SC_OK);
@@ -466,7 +466,7 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
         sc_bvh *b;
-        assert_int_equal(sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &b),
+        assert_int_equal(sc_bvh_build(m, &cfg, &b),
                          SC_OK);
         score s;
         judge(b, rays, n, &o, &s);
@@ -491,7 +491,7 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
                 cfg.tri_test = SC_TRI_EXACT;
                 sc_bvh *b;
                 assert_int_equal(
-                    sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &b), SC_OK);
+                    sc_bvh_build(m, &cfg, &b), SC_OK);
                 score s;
                 judge(b, rays, n, &o, &s);
                 if (configs++ == 0 || s.hit_miss || s.primid || s.any_wrong || s.t_bad)
@@ -516,7 +516,7 @@ static void run_rays(const char *name, const sc_mesh_view *m, const sc_ray *rays
  * at their target, and random rays. */
 static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t seed, int want_closed)
 {
-    sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt };
+    sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt, 0, 0 };
     sc_checked_mesh cm = sc_test_checked(&m);
     int closed = 0;
     assert_int_equal(sc_mesh_is_closed(&cm, &closed), SC_OK);
@@ -602,7 +602,7 @@ static void test_lattice(void **state)
     (void)state;
     mesh m;
     grid_box(&m, 6, 1);    /* integer vertices: exactly zero edge functions for lattice rays */
-    sc_mesh_view v = { m.pos, m.nv, m.idx, m.nt };
+    sc_mesh_view v = { m.pos, m.nv, m.idx, m.nt, 0, 0 };
     size_t n = 6000;
     sc_ray *rays = malloc(n * sizeof *rays);
     lattice_rays(6, n, 11, rays);

@@ -106,7 +106,7 @@ static void check_classify(const sc_mesh_view *m, const want *w, size_t n)
 static void test_classify_known(void **state)
 {
     (void)state;
-    sc_mesh_view oct = { OP, 10, OI, O_TRIS };
+    sc_mesh_view oct = { OP, 10, OI, O_TRIS, 0, 0 };
     const want w[] = {
         /* down the z axis: in at the top vertex (4 triangles), out at the
          * bottom one, then through the floor's diagonal (2 triangles) */
@@ -135,7 +135,7 @@ static void test_classify_known(void **state)
      * corner is crossed or not depending on the side the line is moved to. */
     static const float SP[] = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0 };
     static const uint32_t SI[] = { 0, 1, 2, 0, 2, 3 };
-    sc_mesh_view sq = { SP, 4, SI, 2 };
+    sc_mesh_view sq = { SP, 4, SI, 2, 0, 0 };
     const want s[] = {
         { { { 0.5f, 0.5f, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_CROSS_CROSS }, { 2 }, { 1 } },
         { { { 0.5f, 0, 1 }, 0, { 0, 0, -1 }, INFINITY }, 1, { SC_CROSS_AMBIG }, { 1 }, { 1 } },
@@ -158,7 +158,7 @@ static void test_classify_known(void **state)
 static void test_judge(void **state)
 {
     (void)state;
-    sc_mesh_view v = { OP, 10, OI, O_TRIS };
+    sc_mesh_view v = { OP, 10, OI, O_TRIS, 0, 0 };
     sc_checked_mesh m = sc_test_checked(&v);
     sc_ray rays[] = {
         { { -2, -0.5f, 1.5f }, 0, { 1, 0.25f, -0.25f }, INFINITY },  /* touch at t = 2, floor at 26 */
@@ -419,7 +419,7 @@ static int g_subnormal_products;
 static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t seed)
 {
     size_t not_brute_total = 0;
-    sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt };
+    sc_mesh_view m = { mm->pos, mm->nv, mm->idx, mm->nt, 0, 0 };
     sc_checked_mesh cm = sc_test_checked(&m);
     int closed = 0;
     assert_int_equal(sc_mesh_is_closed(&cm, &closed), SC_OK);
@@ -440,7 +440,7 @@ static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t se
         sc_bvh *bvh;
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
-        assert_int_equal(sc_bvh_build(m.positions, m.vertex_count, m.indices, m.triangle_count, &cfg, &bvh), SC_OK);
+        assert_int_equal(sc_bvh_build(&m, &cfg, &bvh), SC_OK);
         bt = brute_all(bvh, &set, NULL, set.count, 1);
         sc_bvh_free(bvh);
     }
@@ -455,12 +455,12 @@ static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t se
                 cfg.prefilter = (sc_prefilter_mode)pm;
                 cfg.leaf_size = leaves[li];
                 sc_bvh *bvh;
-                assert_int_equal(sc_bvh_build(m.positions, m.vertex_count, m.indices, m.triangle_count, &cfg, &bvh),
+                assert_int_equal(sc_bvh_build(&m, &cfg, &bvh),
                                  SC_OK);
                 tally tl;
                 score(bvh, &set, NULL, &o, bt, &tl);
                 if (configs++ == 0 || tl.holes || tl.any_holes || tl.not_brute)
-                    print_message("%s (%u tris, %zu rays) isa %d %s leaf %d: crossing vertex/edge rays %zu, "
+                    print_message("%s (%zu tris, %zu rays) isa %d %s leaf %d: crossing vertex/edge rays %zu, "
                                   "holes %zu (any-hit %zu); touching rays %zu, grazes missed %zu; "
                                   "old definition %zu; traversal != brute %zu\n",
                                   name, m.triangle_count, set.count, isa, sc_prefilter_mode_name(cfg.prefilter),
@@ -562,13 +562,13 @@ static void shared_scene(const char *name, const sc_mesh_view *m, void *ctx)
         sc_bvh_config_default(&cfg);
         cfg.prefilter = modes[mi];
         sc_bvh *bvh;
-        assert_int_equal(sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, &cfg, &bvh),
+        assert_int_equal(sc_bvh_build(m, &cfg, &bvh),
                          SC_OK);
         if (!bt)
             bt = brute_all(bvh, &set, sample, ns, 8);   /* 1250 rays x all triangles */
         tally tl;
         score(bvh, &set, sample, &o, bt, &tl);
-        print_message("%s (%u tris) %s: crossing vertex/edge rays %zu, holes %zu (any-hit %zu); touching "
+        print_message("%s (%zu tris) %s: crossing vertex/edge rays %zu, holes %zu (any-hit %zu); touching "
                       "rays %zu, grazes missed %zu; old definition %zu; traversal != brute %zu\n",
                       name, m->triangle_count, sc_prefilter_mode_name(modes[mi]), tl.hole_rays, tl.holes,
                       tl.any_holes, tl.graze_rays, tl.grazes_missed, tl.old_holes, tl.not_brute);

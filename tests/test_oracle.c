@@ -33,7 +33,7 @@ static const uint32_t I[] = {
 
 static sc_checked_mesh scene(void)
 {
-    sc_mesh_view m = { P, 12, I, 7 };
+    sc_mesh_view m = { P, 12, I, 7, 0, 0 };
     return sc_test_checked(&m);
 }
 

@@ -188,6 +188,14 @@ static void to_packet8(const sc_ray *r, sc_ray_packet8 *p)
 
 static int same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
 
+/* Lane i of a hit packet of width W (8 or 16) holds, bit for bit, the
+ * single-ray record: t, u, v, prim, the normal, geometry and instance. */
+#define SAME_LANE(hp, i, ref)                                                                        \
+    ((hp)->prim[i] == (ref).prim && same_bits((hp)->t[i], (ref).t) && same_bits((hp)->u[i], (ref).u) && \
+     same_bits((hp)->v[i], (ref).v) && same_bits((hp)->ng_x[i], (ref).ng[0]) &&                     \
+     same_bits((hp)->ng_y[i], (ref).ng[1]) && same_bits((hp)->ng_z[i], (ref).ng[2]) &&              \
+     (hp)->geom[i] == (ref).geom && (hp)->inst[i] == (ref).inst)
+
 /* Packets of 16 and of 8 (each 16 split in two) against single rays.
  * Returns the number of lanes that differ; adds the statistics. */
 static size_t check(const sc_bvh *b, const packets *pk, sc_trace_stats *st)
@@ -217,8 +225,7 @@ static size_t check(const sc_bvh *b, const packets *pk, sc_trace_stats *st)
                 bad += h16->prim[i] != 0x5a5a5a5au || occ[i] != 0x5a5a5a5a;
                 continue;
             }
-            int ok = h16->prim[i] == ref[i].prim && same_bits(h16->t[i], ref[i].t) &&
-                     same_bits(h16->u[i], ref[i].u) && same_bits(h16->v[i], ref[i].v) && occ[i] == occ_ref[i];
+            int ok = SAME_LANE(h16, i, ref[i]) && occ[i] == occ_ref[i];
             if (!ok && bad < 5)
                 print_message("lane %d: packet prim %u t %a occ %d, single prim %u t %a occ %d\n", i,
                               h16->prim[i], (double)h16->t[i], occ[i], ref[i].prim, (double)ref[i].t, occ_ref[i]);
@@ -236,8 +243,7 @@ static size_t check(const sc_bvh *b, const packets *pk, sc_trace_stats *st)
                     bad += h8->prim[i] != 0x5a5a5a5au || occ[i] != 0x5a5a5a5a;
                     continue;
                 }
-                bad += !(h8->prim[i] == ref[j].prim && same_bits(h8->t[i], ref[j].t) &&
-                         same_bits(h8->u[i], ref[j].u) && same_bits(h8->v[i], ref[j].v) && occ[i] == occ_ref[j]);
+                bad += !(SAME_LANE(h8, i, ref[j]) && occ[i] == occ_ref[j]);
             }
         }
     }
@@ -253,7 +259,7 @@ static sc_bvh *build(const tmesh *m, int leaf, sc_prefilter_mode mode, sc_tri_te
     cfg.prefilter = mode;
     cfg.tri_test = tt;
     sc_bvh *bvh = NULL;
-    assert_int_equal(sc_bvh_build(m->pos, m->nv, m->idx, m->nt, &cfg, &bvh), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ m->pos, m->nv, m->idx, m->nt, 0, 0 }, &cfg, &bvh), SC_OK);
     return bvh;
 }
 
@@ -432,8 +438,7 @@ static void test_streams(void **state)
             int occ;
             assert_int_equal(sc_trace_closest(bvh, &r[i].r, &ref, NULL), SC_OK);
             assert_int_equal(sc_trace_any(bvh, &r[i].r, &occ, NULL), SC_OK);
-            bad += !(h[i].h.prim == ref.prim && same_bits(h[i].h.t, ref.t) && same_bits(h[i].h.u, ref.u) &&
-                     same_bits(h[i].h.v, ref.v) && h[i].occ == occ);
+            bad += !(memcmp(&h[i].h, &ref, sizeof ref) == 0 && h[i].occ == occ);
         }
         assert_int_equal(bad, 0);
     }

@@ -162,7 +162,8 @@ static void test_shadow_and_diffuse(void **state)
                        { { 5, 5, 5 }, 0, { 1, 0, 0 }, INFINITY } };
     from.rays = rays, from.count = 2;
     const float *A = pm.positions;
-    sc_hitrec hits[2] = { { 1 - A[1], 0, 0, 0 }, { INFINITY, 0, 0, SC_HITREC_MISS } };
+    sc_hitrec hits[2] = { { 1 - A[1], 0, 0, 0, { 0, 0, 0 }, 0, SC_INVALID_ID },
+                          { INFINITY, 0, 0, SC_HITREC_MISS, { 0, 0, 0 }, SC_INVALID_ID, SC_INVALID_ID } };
     const float light[3] = { 0.5f, 3, 0.5f };
     sc_rayset sh, df;
     assert_int_equal(sc_rayset_shadow(&cm, &from, hits, light, &sh), SC_OK);
@@ -224,7 +225,7 @@ static void test_mesh_check(void **state)
     (void)state;
     const float P[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
     const uint32_t I[3] = { 0, 1, 2 }, far[3] = { 0, 1, 3 };
-    sc_mesh_view m = { P, 3, I, 1 };
+    sc_mesh_view m = { P, 3, I, 1, 0, 0 };
     sc_checked_mesh cm;
     assert_int_equal(sc_mesh_check(&m, &cm), SC_OK);
     assert_ptr_equal(cm.view.positions, P);

@@ -28,7 +28,7 @@ static sc_scene *sphere_scene(int w, int h, const double eye[3], sc_bvh **bvh, s
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     cfg.prefilter = pf;
-    assert_int_equal(sc_bvh_build(v.positions, v.num_vertices, v.indices, v.num_triangles, &cfg, bvh),
+    assert_int_equal(sc_bvh_build(&v.mesh, &cfg, bvh),
                      SC_OK);
     return s;
 }
@@ -95,7 +95,7 @@ static void test_deterministic(void **state)
     v.camera.width = 96;
     v.camera.height = 64;
     sc_bvh *bvh;
-    assert_int_equal(sc_bvh_build(v.positions, v.num_vertices, v.indices, v.num_triangles, NULL, &bvh),
+    assert_int_equal(sc_bvh_build(&v.mesh, NULL, &bvh),
                      SC_OK);
     sc_render_options o;
     sc_render_options_init(&o);

@@ -69,19 +69,19 @@ static void test_sphere_closed_and_exact(void **state)
     size_t st = 3;
     while (4 * st * st - 4 * st < 5000)
         st++;
-    assert_int_equal(v.num_triangles, 4 * st * st - 4 * st);
-    for (size_t i = 0; i < v.num_vertices; i++) {
-        const float *p = v.positions + 3 * i;
+    assert_int_equal(v.mesh.triangle_count, 4 * st * st - 4 * st);
+    for (size_t i = 0; i < v.mesh.vertex_count; i++) {
+        const float *p = v.mesh.positions + 3 * i;
         double r = sqrt((double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2]);
         assert_true(fabs(r - 1) < 2e-7);
     }
-    size_t ne = 3 * v.num_triangles;
+    size_t ne = 3 * v.mesh.triangle_count;
     edge *e = malloc(ne * sizeof *e), *d = malloc(ne * sizeof *d);
     assert_non_null(e);
     assert_non_null(d);
-    for (size_t t = 0; t < v.num_triangles; t++)
+    for (size_t t = 0; t < v.mesh.triangle_count; t++)
         for (int k = 0; k < 3; k++) {
-            uint32_t a = v.indices[3 * t + k], b = v.indices[3 * t + (k + 1) % 3];
+            uint32_t a = v.mesh.indices[3 * t + k], b = v.mesh.indices[3 * t + (k + 1) % 3];
             assert_int_not_equal(a, b);
             e[3 * t + k] = (edge){ a < b ? a : b, a < b ? b : a };
             d[3 * t + k] = (edge){ a, b };
@@ -98,7 +98,7 @@ static void test_sphere_closed_and_exact(void **state)
     /* Consistent orientation: no directed edge appears twice. */
     for (size_t i = 0; i + 1 < ne; i++)
         assert_int_not_equal(edge_cmp(&d[i], &d[i + 1]), 0);
-    assert_int_equal((long)v.num_vertices - (long)unique + (long)v.num_triangles, 2);
+    assert_int_equal((long)v.mesh.vertex_count - (long)unique + (long)v.mesh.triangle_count, 2);
     free(e);
     free(d);
     sc_scene_stats ss;
@@ -124,13 +124,13 @@ static void test_procedural_counts_and_seed(void **state)
         sc_scene_view va, vb;
         sc_scene_get_view(a, &va);
         sc_scene_get_view(b, &vb);
-        assert_true(va.num_triangles >= want[i]);
-        assert_true(va.num_triangles < want[i] + want[i] / 50 + 300);
-        assert_int_equal(va.num_vertices, vb.num_vertices);
-        assert_memory_equal(va.positions, vb.positions, 3 * sizeof(float) * va.num_vertices);
+        assert_true(va.mesh.triangle_count >= want[i]);
+        assert_true(va.mesh.triangle_count < want[i] + want[i] / 50 + 300);
+        assert_int_equal(va.mesh.vertex_count, vb.mesh.vertex_count);
+        assert_memory_equal(va.mesh.positions, vb.mesh.positions, 3 * sizeof(float) * va.mesh.vertex_count);
         /* Everything stays in the advertised box (with the triangle size). */
-        for (size_t k = 0; k < 3 * va.num_vertices; k++)
-            assert_true(fabsf(va.positions[k]) < 1.25f);
+        for (size_t k = 0; k < 3 * va.mesh.vertex_count; k++)
+            assert_true(fabsf(va.mesh.positions[k]) < 1.25f);
         sc_scene_free(a);
         sc_scene_free(b);
     }
@@ -145,18 +145,18 @@ static void test_procedural_counts_and_seed(void **state)
     sc_scene_view va, vb;
     sc_scene_get_view(a, &va);
     sc_scene_get_view(b, &vb);
-    assert_true(memcmp(va.positions, vb.positions, 3 * sizeof(float) * va.num_vertices) != 0);
+    assert_true(memcmp(va.mesh.positions, vb.mesh.positions, 3 * sizeof(float) * va.mesh.vertex_count) != 0);
     sc_scene_free(a);
     sc_scene_free(b);
     /* Slivers are what their name says: min altitude / longest edge tiny. */
     sc_scene *sl = load_ok("proc:slivers:200", &w);
     sc_scene_view vs;
     sc_scene_get_view(sl, &vs);
-    for (size_t t = 0; t < vs.num_triangles; t++) {
+    for (size_t t = 0; t < vs.mesh.triangle_count; t++) {
         double p[3][3], l2[3], n[3];
         for (int k = 0; k < 3; k++)
             for (int i = 0; i < 3; i++)
-                p[k][i] = vs.positions[3 * vs.indices[3 * t + k] + i];
+                p[k][i] = vs.mesh.positions[3 * vs.mesh.indices[3 * t + k] + i];
         for (int k = 0; k < 3; k++) {
             l2[k] = 0;
             for (int i = 0; i < 3; i++)
@@ -188,11 +188,11 @@ static void test_grid_reaches_a_million(void **state)
     while (4 * st * st - 4 * st < 10000)
         st++;
     size_t per = 4 * st * st - 4 * st, copies = (1000000 + per - 1) / per;
-    assert_true(v.num_triangles >= 1000000);
-    assert_int_equal(v.num_triangles, copies * per);
+    assert_true(v.mesh.triangle_count >= 1000000);
+    assert_int_equal(v.mesh.triangle_count, copies * per);
     assert_int_equal(v.num_meshes, 1);
-    for (size_t t = 0; t < v.num_triangles; t++)
-        assert_true(v.indices[3 * t] < v.num_vertices && v.mesh_ids[t] == 0);
+    for (size_t t = 0; t < v.mesh.triangle_count; t++)
+        assert_true(v.mesh.indices[3 * t] < v.mesh.vertex_count && v.mesh_ids[t] == 0);
     /* Copies sit 1.25 model widths apart on a square grid. */
     sc_scene_stats ss, one;
     sc_scene_get_stats(s, &ss);
@@ -243,8 +243,8 @@ static void test_raw_buffers(void **state)
     assert_non_null(strstr(w.last, "NaN"));
     sc_scene_view v;
     sc_scene_get_view(s, &v);
-    for (size_t i = 0; i < 3 * v.num_vertices; i++)
-        assert_true(isfinite(v.positions[i]));
+    for (size_t i = 0; i < 3 * v.mesh.vertex_count; i++)
+        assert_true(isfinite(v.mesh.positions[i]));
     /* The cap: 2 + 3 > 4 refuses and leaves the scene as it was. */
     const uint32_t three[] = { 0, 1, 2, 0, 1, 2, 0, 1, 2 };
     assert_int_equal(sc_scene_add_mesh(s, pos, 3, three, 3, NULL, err, sizeof err), SC_ERR_LIMIT);
@@ -291,9 +291,9 @@ static void test_json_fixture(void **state)
     assert_true(v.mesh_colors[6] == 0 && v.mesh_colors[7] == 1);
     /* Transforms: the sphere is scaled 0.5 about (2, 0.5, 0); the second
      * tetra is turned 90 degrees about y: (1,0,0) -> (0,0,-1), then moved. */
-    for (size_t t = 0; t < v.num_triangles; t++) {
+    for (size_t t = 0; t < v.mesh.triangle_count; t++) {
         for (int k = 0; k < 3; k++) {
-            const float *p = v.positions + 3 * v.indices[3 * t + k];
+            const float *p = v.mesh.positions + 3 * v.mesh.indices[3 * t + k];
             if (v.mesh_ids[t] == 1) {
                 double r = sqrt((p[0] - 2.0) * (p[0] - 2.0) + (p[1] - 0.5) * (p[1] - 0.5) + p[2] * p[2]);
                 assert_true(fabs(r - 0.5) < 1e-6);
@@ -327,7 +327,7 @@ static void test_cache_prefix(void **state)
     assert_int_equal(sc_scene_load("cache:tetra.obj", &o, &s, err, sizeof err), SC_OK);
     sc_scene_view v;
     sc_scene_get_view(s, &v);
-    assert_int_equal(v.num_triangles, 4);
+    assert_int_equal(v.mesh.triangle_count, 4);
     sc_scene_free(s);
     assert_int_equal(sc_scene_load("cache:absent.off", &o, &s, err, sizeof err), SC_ERR_IO);
     assert_null(s);

@@ -148,7 +148,7 @@ static void test_assimp_invalid_dir(void **state)
             assert_int_equal(st, SC_OK);
             sc_scene_view v;
             sc_scene_get_view(s, &v);
-            assert_true(v.num_triangles >= 10);
+            assert_true(v.mesh.triangle_count >= 10);
             assert_true(v.mesh_colors[0] == v.mesh_colors[1] && v.mesh_colors[1] == v.mesh_colors[2]);
             assert_true(v.mesh_colors[0] == 0.75f);
             assert_true(w.count >= 1);
@@ -223,8 +223,8 @@ static void test_nonfinite_in_files(void **state)
     assert_true(w.count >= 1);
     sc_scene_view v;
     sc_scene_get_view(s, &v);
-    for (size_t i = 0; i < 3 * v.num_vertices; i++)
-        assert_true(isfinite(v.positions[i]));
+    for (size_t i = 0; i < 3 * v.mesh.vertex_count; i++)
+        assert_true(isfinite(v.mesh.positions[i]));
     sc_scene_free(s);
     /* All triangles bad: nothing left to render is an error. */
     snprintf(path, sizeof path, "%s/allnan.obj", tmpdir);
@@ -613,13 +613,13 @@ static void compare_modes(const char *spec)
     sc_scene_get_view(sc[1], &b);
     sc_scene_get_stats(sc[0], &sa);
     sc_scene_get_stats(sc[1], &sb);
-    assert_int_equal(a.num_vertices, b.num_vertices);
-    assert_int_equal(a.num_triangles, b.num_triangles);
+    assert_int_equal(a.mesh.vertex_count, b.mesh.vertex_count);
+    assert_int_equal(a.mesh.triangle_count, b.mesh.triangle_count);
     assert_int_equal(a.num_meshes, b.num_meshes);
-    assert_true(a.num_triangles > 0);
-    assert_memory_equal(a.positions, b.positions, a.num_vertices * 3 * sizeof(float));
-    assert_memory_equal(a.indices, b.indices, a.num_triangles * 3 * sizeof(uint32_t));
-    assert_memory_equal(a.mesh_ids, b.mesh_ids, a.num_triangles * sizeof(uint32_t));
+    assert_true(a.mesh.triangle_count > 0);
+    assert_memory_equal(a.mesh.positions, b.mesh.positions, a.mesh.vertex_count * 3 * sizeof(float));
+    assert_memory_equal(a.mesh.indices, b.mesh.indices, a.mesh.triangle_count * 3 * sizeof(uint32_t));
+    assert_memory_equal(a.mesh_ids, b.mesh_ids, a.mesh.triangle_count * sizeof(uint32_t));
     assert_memory_equal(a.mesh_colors, b.mesh_colors, a.num_meshes * 3 * sizeof(float));
     assert_memory_equal(&a.camera, &b.camera, sizeof a.camera);
     assert_int_equal(sa.degenerate_triangles, sb.degenerate_triangles);

@@ -52,10 +52,10 @@ static void make_rays(const sc_scene_view *v, rayset *rs)
             r->tmin = 0, r->tmax = INFINITY;
         }
     float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (size_t i = 0; i < v->num_vertices; i++)
+    for (size_t i = 0; i < v->mesh.vertex_count; i++)
         for (int k = 0; k < 3; k++) {
-            lo[k] = fminf(lo[k], v->positions[3 * i + k]);
-            hi[k] = fmaxf(hi[k], v->positions[3 * i + k]);
+            lo[k] = fminf(lo[k], v->mesh.positions[3 * i + k]);
+            hi[k] = fmaxf(hi[k], v->mesh.positions[3 * i + k]);
         }
     sc_rng rng;
     sc_rng_seed(&rng, 42);
@@ -80,7 +80,7 @@ static sc_bvh *build(const sc_scene_view *v, sc_prefilter_mode mode, int leaf)
     cfg.prefilter = mode;
     cfg.leaf_size = leaf;
     sc_bvh *bvh = NULL;
-    assert_int_equal(sc_bvh_build(v->positions, v->num_vertices, v->indices, v->num_triangles, &cfg, &bvh), SC_OK);
+    assert_int_equal(sc_bvh_build(&v->mesh, &cfg, &bvh), SC_OK);
     return bvh;
 }
 
@@ -166,7 +166,7 @@ static void check_scene(const char *spec)
         sc_bvh_free(off);
     }
     print_message("%s: %zu triangles, %ld ray answers compared with prefilter off, %ld differ\n",
-                  spec, v.num_triangles, compared, mismatches);
+                  spec, v.mesh.triangle_count, compared, mismatches);
     assert_int_equal(mismatches, 0);
     free(ref);
     free(ref_occ);

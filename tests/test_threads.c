@@ -170,7 +170,7 @@ static void *builder(void *arg)
         sc_bvh *own = NULL;
         sc_bvh_config cfg = sh->cfg;
         cfg.prefilter = b % 2 ? SC_PREFILTER_MINIMAL : SC_PREFILTER_AUTO;
-        w->errors += sc_bvh_build(s.pos, 3 * NTRI, s.idx, NTRI, &cfg, &own) != SC_OK;
+        w->errors += sc_bvh_build(&(sc_mesh_view){ s.pos, 3 * NTRI, s.idx, NTRI, 0, 0 }, &cfg, &own) != SC_OK;
         if (own) {
             /* its answers equal brute force over the same triangles */
             for (int i = 0; i < 64; i++) {
@@ -211,7 +211,7 @@ static void run_isa(sc_isa isa, int switch_isa)
     cfg.prefilter = SC_PREFILTER_CIRCUM;
     cfg.tri_test = SC_TRI_EXACT;       /* closest hits are exact: any thread must agree bit for bit */
     sc_bvh *bvh;
-    assert_int_equal(sc_bvh_build(s.pos, 3 * NTRI, s.idx, NTRI, &cfg, &bvh), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ s.pos, 3 * NTRI, s.idx, NTRI, 0, 0 }, &cfg, &bvh), SC_OK);
     sc_ray *rays = malloc(sizeof(sc_ray) * NRAY);
     sc_hitrec *want = malloc(sizeof(sc_hitrec) * NRAY);
     int *want_occ = malloc(sizeof(int) * NRAY);

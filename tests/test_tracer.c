@@ -38,7 +38,7 @@ static sc_mesh_view make_mesh(void)
                 nt += 2;
             }
     }
-    return (sc_mesh_view){ pos, nv, idx, nt };
+    return (sc_mesh_view){ pos, nv, idx, nt, 0, 0 };
 }
 
 static void test_same_hit(void **state)

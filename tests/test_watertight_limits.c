@@ -61,7 +61,7 @@ static sc_bvh *build(sc_tri_test test)
     sc_bvh_config_default(&cfg);
     cfg.tri_test = test;
     sc_bvh *b = NULL;
-    assert_int_equal(sc_bvh_build(&tris[0][0], 6, idx, 2, &cfg, &b), SC_OK);
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ &tris[0][0], 6, idx, 2, 0, 0 }, &cfg, &b), SC_OK);
     return b;
 }
 

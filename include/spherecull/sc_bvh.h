@@ -7,7 +7,8 @@
  *   sc_bvh_config_default(&cfg);              // leaf 8, prefilter off
  *   cfg.prefilter = SC_PREFILTER_MINIMAL;
  *   sc_bvh *bvh;
- *   sc_status s = sc_bvh_build(pos, nverts, idx, ntris, &cfg, &bvh);
+ *   sc_mesh_view mesh = { pos, nverts, idx, ntris, 0, 0 };    // sc_mesh.h; 0: packed
+ *   sc_status s = sc_bvh_build(&mesh, &cfg, &bvh);
  *   ... sc_trace_closest(bvh, &ray, &hit, NULL) ...   (sc_trace.h)
  *   sc_bvh_free(bvh);
  *
@@ -41,6 +42,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "sc_mesh.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -103,14 +105,14 @@ SC_API void sc_bvh_config_default(sc_bvh_config *cfg);
  * OpenMP or thread pool inside). The input arrays are only read. A BVH may
  * be freed only when no thread traces it any more.
  *
- * positions: 3 floats per vertex; indices: 3 per triangle, each < vertex_count.
- * triangle_count may be 0 (every ray misses).
- * Errors: INVALID_ARGUMENT (NULL, index out of range, bad config),
+ * mesh: a view of the caller's vertex and index arrays (sc_mesh.h; strides
+ * allowed), each index < vertex_count; triangle_count may be 0 (every ray
+ * misses; the arrays may then be NULL). cfg NULL: sc_bvh_config_default.
+ * Errors: INVALID_ARGUMENT (NULL, bad layout, index out of range, bad config),
  * LIMIT (more than 2^31 triangles), OUT_OF_MEMORY.
  * Which kernels traverse the tree is not the BVH's business: the ISA level
  * (sc_isa.h) is chosen once for the whole library. */
-SC_API sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
-                              size_t triangle_count, const sc_bvh_config *cfg, sc_bvh **out);
+SC_API sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg, sc_bvh **out);
 SC_API void sc_bvh_free(sc_bvh *bvh);
 SC_API sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 

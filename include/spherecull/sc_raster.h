@@ -27,20 +27,15 @@
 #include <stdint.h>
 
 #include "sc_camera.h"
+#include "sc_mesh.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Raw indexed triangles, borrowed for the duration of a call. */
-typedef struct sc_raster_mesh {
-    const float *positions;      /* xyz per vertex */
-    size_t vertex_count;
-    const uint32_t *indices;     /* three vertex indices per triangle */
-    size_t triangle_count;       /* < UINT32_MAX: IDs are index + 1 in 32 bits */
-    const float *colors;         /* optional RGB in [0, 1] per triangle; NULL = light grey */
-} sc_raster_mesh;
+/* Meshes are sc_mesh_view (sc_mesh.h), borrowed for the duration of a
+ * call; fewer than UINT32_MAX triangles (IDs are index + 1 in 32 bits). */
 
 typedef enum sc_raster_depth_mode {
     /* FLOAT_REVERSED when the GL offers it, else FIXED24. */
@@ -68,6 +63,7 @@ typedef struct sc_raster_options {
      * camera's upper right. */
     double light_dir[3];
     uint8_t background[3];       /* preview background, sRGB bytes */
+    const float *colors;         /* preview RGB in [0, 1] per triangle; NULL = light grey */
 } sc_raster_options;
 
 /* The defaults: AUTO, derived near/far, camera light, dark grey background. */
@@ -101,7 +97,7 @@ typedef struct sc_raster_image {
  *   SC_ERR_UNSUPPORTED       OSMesa could not create a context, or the
  *                            requested depth mode is not available
  *   SC_ERR_OUT_OF_MEMORY */
-SC_API sc_status sc_raster_render(const sc_raster_mesh *mesh, const sc_camera *cam,
+SC_API sc_status sc_raster_render(const sc_mesh_view *mesh, const sc_camera *cam,
                                   const sc_raster_options *opt, sc_raster_image *out);
 
 /* Frees the buffers and zeroes the struct; NULL is fine. */
@@ -119,7 +115,7 @@ SC_API void sc_raster_image_free(sc_raster_image *img);
  * the clip edge counts as an edge, since the rasterizer has one there too.
  * *dist_px = +inf when neither candidate has a visible part.
  * Needs no GL: also built into spherecull_raster, for the compare commands. */
-SC_API sc_status sc_raster_edge_distance(const sc_raster_mesh *mesh, const sc_camera *cam,
+SC_API sc_status sc_raster_edge_distance(const sc_mesh_view *mesh, const sc_camera *cam,
                                          double near_dist, int x, int y,
                                          uint32_t id_a, uint32_t id_b, double *dist_px);
 
@@ -148,7 +144,7 @@ SC_API const char *sc_raster_diff_name(sc_raster_diff kind);
  * holds one ID and other_id (same encoding, 0 = miss) another; edge_px (may
  * be NULL) receives sc_raster_edge_distance's answer. Agreeing IDs are
  * SC_ERR_INVALID_ARGUMENT: there is nothing to classify. */
-SC_API sc_status sc_raster_classify(const sc_raster_mesh *mesh, const sc_camera *cam,
+SC_API sc_status sc_raster_classify(const sc_mesh_view *mesh, const sc_camera *cam,
                                     const sc_raster_image *img, int x, int y, uint32_t other_id,
                                     sc_raster_diff *kind, double *edge_px);
 

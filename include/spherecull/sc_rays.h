@@ -42,6 +42,7 @@
 #include "sc_api.h"
 #include "sc_camera.h"
 #include "sc_hit.h"
+#include "sc_mesh.h"
 #include "sc_prefilter.h"
 #include "sc_status.h"
 
@@ -50,25 +51,6 @@ extern "C" {
 #endif
 
 #define SC_RAYS_OFFSET 1e-4
-
-/* A triangle mesh as the ray generators and tracer back ends see it: float
- * positions (3 per vertex) and 32-bit indices (3 per triangle). Not owned. */
-typedef struct sc_mesh_view {
-    const float *positions;
-    uint32_t vertex_count;
-    const uint32_t *indices;
-    uint32_t triangle_count;
-} sc_mesh_view;
-
-/* A mesh view that passed sc_mesh_check, with the bounds of the vertices its
- * triangles reference. The ray generators, the oracle and the Embree back end
- * take this type and trust it: a mesh is checked and measured once, where it
- * enters, not again by every function it passes through. Make it with
- * sc_mesh_check only, and check again if the arrays change. */
-typedef struct sc_checked_mesh {
-    sc_mesh_view view;
-    float lo[3], hi[3];
-} sc_checked_mesh;
 
 typedef enum sc_rayset_kind {
     SC_RAYS_PRIMARY = 0,
@@ -108,19 +90,6 @@ SC_API const char *sc_ray_tag_name(sc_ray_tag tag);
 
 /* Frees the arrays and zeroes the struct; NULL and zeroed sets are fine. */
 SC_API void sc_rayset_free(sc_rayset *set);
-
-/* Checks a mesh view (non-NULL arrays, at least one vertex and triangle,
- * indices in range, finite positions) and fills *out with it and its
- * bounds. SC_ERR_INVALID_ARGUMENT / SC_ERR_NONFINITE otherwise, *out zeroed. */
-SC_API sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out);
-
-/* Axis-aligned bounds of the referenced vertices of an unchecked view (a
- * checked mesh carries them). */
-SC_API sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3]);
-
-/* *closed = 1 iff, after welding identical positions, every edge is used by
- * exactly two triangles (degenerate triangles ignored). */
-SC_API sc_status sc_mesh_is_closed(const sc_checked_mesh *mesh, int *closed);
 
 SC_API sc_status sc_rayset_primary(const sc_camera *cam, sc_rayset *out);
 

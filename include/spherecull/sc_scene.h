@@ -54,6 +54,7 @@
 #include <stdint.h>
 
 #include "sc_camera.h"
+#include "sc_mesh.h"
 #include "sc_status.h"
 
 #ifdef __cplusplus
@@ -114,12 +115,11 @@ typedef struct sc_scene_options {
 
 /* Read-only view of a scene; valid until the scene is freed or modified. */
 typedef struct sc_scene_view {
-    const float *positions;     /* 3 floats per vertex */
-    const uint32_t *indices;    /* 3 per triangle, each < num_vertices */
+    sc_mesh_view mesh;          /* every triangle of the scene, packed (strides 0) */
     const uint32_t *mesh_ids;   /* 1 per triangle, each < num_meshes */
     const float *mesh_colors;   /* 3 per mesh, linear RGB in [0, 1] */
     const sc_light *lights;
-    size_t num_vertices, num_triangles, num_meshes, num_lights;
+    size_t num_meshes, num_lights;
     sc_camera camera;           /* always valid for sc_camera_frame_make */
     float background[3];
     float ambient;              /* constant ambient term in [0, 1] */

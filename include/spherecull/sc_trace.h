@@ -10,7 +10,9 @@
  * tmin <= t <= tmax; both faces are hit; the direction need not be unit
  * length. hit.t is the ray parameter, hit.u and hit.v the barycentric weights
  * of the triangle's second and third vertex (P = (1-u-v) V0 + u V1 + v V2),
- * hit.prim the triangle's index in the build input. Of hits at equal t the
+ * hit.prim the triangle's index in the build input, hit.ng its geometric
+ * normal (V1 - V0) x (V2 - V0) and hit.geom / hit.inst its geometry (0) and
+ * instance (none) ids (sc_hit.h). Of hits at equal t the
  * one with the smaller index is reported (SC_TRI_WATERTIGHT, SC_TRI_MOLLER),
  * so the answer does not depend on the order the tree is walked in: the
  * packet and stream calls below return the same bits.

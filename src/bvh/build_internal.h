@@ -9,8 +9,7 @@
 
 typedef struct bvh_builder {
     const sc_bvh_config *cfg;
-    const float *pos;
-    const uint32_t *idx;
+    const sc_mesh_view *mesh;
     const uint32_t *ids;     /* triangle ids, leaves are contiguous ranges */
     const sc_bnode *bn;      /* the binary tree */
     int dry;                 /* 1: only measure */
@@ -24,7 +23,7 @@ typedef struct bvh_builder {
 
 static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)
 {
-    return B->pos + 3 * (size_t)B->idx[3 * (size_t)tri + corner];
+    return sc_mesh_vertex(B->mesh, sc_mesh_triangle(B->mesh, tri)[corner]);
 }
 
 /* Writes (or, dry, measures) the 8-wide node over binary nodes kids[0..nk)

@@ -31,18 +31,20 @@ static void *alloc_aligned(size_t bytes)
     return aligned_alloc(64, n ? n : 64);
 }
 
-sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32_t *indices,
-                       size_t triangle_count, const sc_bvh_config *cfg_in, sc_bvh **out)
+sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc_bvh **out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     *out = NULL;
+    if (!mesh || !sc_mesh_layout_ok(mesh))
+        return SC_ERR_INVALID_ARGUMENT;
+    const size_t vertex_count = mesh->vertex_count, triangle_count = mesh->triangle_count;
     sc_bvh_config cfg;
     if (cfg_in)
         cfg = *cfg_in;
     else
         sc_bvh_config_default(&cfg);
-    if (triangle_count && (!positions || !indices))
+    if (triangle_count && (!mesh->positions || !mesh->indices))
         return SC_ERR_INVALID_ARGUMENT;
     if (cfg.leaf_size < 1 || cfg.leaf_size > SC_BVH_MAX_LEAF || (unsigned)cfg.prefilter >= SC_PREFILTER_MODE_COUNT ||
         (unsigned)cfg.tri_test >= SC_TRI_TEST_COUNT ||
@@ -50,17 +52,18 @@ sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32
         return SC_ERR_INVALID_ARGUMENT;
     if (triangle_count > (size_t)INT32_MAX)
         return SC_ERR_LIMIT;
-    for (size_t i = 0; i < 3 * triangle_count; i++)
-        if (indices[i] >= vertex_count)
+    for (size_t t = 0; t < triangle_count; t++) {
+        const uint32_t *ix = sc_mesh_triangle(mesh, t);
+        if (ix[0] >= vertex_count || ix[1] >= vertex_count || ix[2] >= vertex_count)
             return SC_ERR_INVALID_ARGUMENT;
+    }
     sc_status st;
 
     double t0 = sc_now_seconds();
     sc_bvh *bvh = calloc(1, sizeof *bvh);
     bvh_builder B = { 0 };
     B.cfg = &cfg;
-    B.pos = positions;
-    B.idx = indices;
+    B.mesh = mesh;
     size_t n = triangle_count;
     box3 *pbox = malloc(sizeof(box3) * (n ? n : 1));
     float (*cen)[3] = malloc(sizeof(float[3]) * (n ? n : 1));
@@ -80,7 +83,7 @@ sc_status sc_bvh_build(const float *positions, size_t vertex_count, const uint32
         box_empty(&b);
         int finite = 1;
         for (int corner = 0; corner < 3; corner++) {
-            const float *p = positions + 3 * (size_t)indices[3 * t + corner];
+            const float *p = vtx(&B, (uint32_t)t, corner);
             for (int k = 0; k < 3; k++) {
                 finite &= isfinite(p[k]) != 0;
                 b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];

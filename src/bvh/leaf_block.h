@@ -46,4 +46,20 @@ static inline const uint32_t *sc_leaf_prims(const float *rows, unsigned W)
     return (const uint32_t *)(const void *)(rows + 9 * W);
 }
 
+/* The geometric normal (V1 - V0) x (V2 - V0) of lane i, in float, the
+ * operations in this order (no contraction: -ffp-contract=off), so every
+ * kernel and ISA reports the same bits. */
+static inline void sc_leaf_normal(const float *rows, unsigned W, unsigned i, float ng[3])
+{
+    float e1[3], e2[3];
+    for (unsigned k = 0; k < 3; k++) {
+        const float v0 = rows[sc_leaf_at(W, 0, k, i)];
+        e1[k] = rows[sc_leaf_at(W, 1, k, i)] - v0;
+        e2[k] = rows[sc_leaf_at(W, 2, k, i)] - v0;
+    }
+    ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
 #endif

@@ -204,13 +204,13 @@ int sc_cli_load_mesh(const char *cmd, const char *spec, sc_scene **scene, sc_sce
         return 1;
     }
     sc_scene_get_view(*scene, v);
-    if (v->num_triangles == 0 || v->num_triangles > UINT32_MAX || v->num_vertices > UINT32_MAX) {
-        sc_cli_error(cmd, "%s: %zu triangles: nothing to trace, or too many", spec, v->num_triangles);
+    if (v->mesh.triangle_count == 0 || v->mesh.triangle_count > UINT32_MAX || v->mesh.vertex_count > UINT32_MAX) {
+        sc_cli_error(cmd, "%s: %zu triangles: nothing to trace, or too many", spec, v->mesh.triangle_count);
         sc_scene_free(*scene);
         *scene = NULL;
         return 1;
     }
-    *mesh = (sc_mesh_view){ v->positions, (uint32_t)v->num_vertices, v->indices, (uint32_t)v->num_triangles };
+    *mesh = (sc_mesh_view){ v->mesh.positions, (uint32_t)v->mesh.vertex_count, v->mesh.indices, (uint32_t)v->mesh.triangle_count, 0, 0 };
     return 0;
 }
 

@@ -160,7 +160,7 @@ static int compare_scene(const char *spec, const sc_cmp_options *opt, sc_cmp_row
     char err[512] = "";
     const char *base = strrchr(spec, '/');
     base = base ? base + 1 : spec;
-    fprintf(stderr, "%s: %zu triangles\n", base, v.num_triangles);
+    fprintf(stderr, "%s: %zu triangles\n", base, v.mesh.triangle_count);
     sc_status st = sc_cmp_scene(base, &mesh, &v.camera, v.lights, v.num_lights, opt, rows, stderr, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {

@@ -182,7 +182,7 @@ static int run(int argc, char **argv)
     cfg.prefilter = prefilter;
     cfg.tri_test = tri;
     sc_bvh *bvh = NULL;
-    st = sc_bvh_build(view.positions, view.num_vertices, view.indices, view.num_triangles, &cfg, &bvh);
+    st = sc_bvh_build(&view.mesh, &cfg, &bvh);
     if (st != SC_OK) {
         sc_cli_error(CMD, "building the BVH failed: %s", sc_strerror(st));
         sc_scene_free(scene);

@@ -139,19 +139,16 @@ int raster_load(const char *cmd, const raster_args *a, loaded *L)
         sc_cli_error(cmd, "camera: eye and target coincide, or the view is parallel to up");
         return 0;
     }
-    L->colors = malloc((v->num_triangles ? v->num_triangles : 1) * 3 * sizeof *L->colors);
+    L->colors = malloc((v->mesh.triangle_count ? v->mesh.triangle_count : 1) * 3 * sizeof *L->colors);
     if (!L->colors) {
-        sc_cli_error(cmd, "out of memory for %zu triangle colours", v->num_triangles);
+        sc_cli_error(cmd, "out of memory for %zu triangle colours", v->mesh.triangle_count);
         return 0;
     }
-    for (size_t t = 0; t < v->num_triangles; t++)
+    for (size_t t = 0; t < v->mesh.triangle_count; t++)
         memcpy(L->colors + 3 * t, v->mesh_colors + 3 * (size_t)v->mesh_ids[t], 3 * sizeof(float));
-    L->mesh.positions = v->positions;
-    L->mesh.vertex_count = v->num_vertices;
-    L->mesh.indices = v->indices;
-    L->mesh.triangle_count = v->num_triangles;
-    L->mesh.colors = L->colors;
+    L->mesh = v->mesh;
     sc_raster_options_default(&L->opt);
+    L->opt.colors = L->colors;
     L->opt.depth_mode = a->depth_mode;
     for (int i = 0; i < 3; i++)
         L->opt.background[i] = to_byte(v->background[i]);

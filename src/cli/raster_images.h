@@ -42,7 +42,7 @@ typedef struct loaded {
     sc_scene_view view;
     sc_camera cam;
     float *colors;               /* per triangle, from the mesh colours */
-    sc_raster_mesh mesh;
+    sc_mesh_view mesh;           /* the scene's triangles */
     sc_raster_options opt;
 } loaded;
 

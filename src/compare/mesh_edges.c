@@ -11,19 +11,33 @@ static sc_status referenced_bounds(const sc_mesh_view *mesh, float lo[3], float 
 {
     for (int k = 0; k < 3; k++)
         lo[k] = INFINITY, hi[k] = -INFINITY;
-    for (size_t i = 0; i < 3 * (size_t)mesh->triangle_count; i++) {
-        uint32_t v = mesh->indices[i];
-        if (v >= mesh->vertex_count)
-            return SC_ERR_INVALID_ARGUMENT;
-        for (int k = 0; k < 3; k++) {
-            float x = mesh->positions[3 * (size_t)v + k];
-            if (!isfinite(x))
-                return SC_ERR_NONFINITE;
-            if (x < lo[k]) lo[k] = x;
-            if (x > hi[k]) hi[k] = x;
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = sc_mesh_triangle(mesh, t);
+        for (int c = 0; c < 3; c++) {
+            if (ix[c] >= mesh->vertex_count)
+                return SC_ERR_INVALID_ARGUMENT;
+            const float *p = sc_mesh_vertex(mesh, ix[c]);
+            for (int k = 0; k < 3; k++) {
+                float x = p[k];
+                if (!isfinite(x))
+                    return SC_ERR_NONFINITE;
+                if (x < lo[k]) lo[k] = x;
+                if (x > hi[k]) hi[k] = x;
+            }
         }
     }
     return SC_OK;
+}
+
+static int stride_ok(size_t s)
+{
+    return s == 0 || (s >= 12 && s % 4 == 0);
+}
+
+int sc_mesh_layout_ok(const sc_mesh_view *m)
+{
+    return m && stride_ok(m->vertex_stride) && stride_ok(m->index_stride) &&
+           (uintptr_t)m->positions % 4 == 0 && (uintptr_t)m->indices % 4 == 0;
 }
 
 sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out)
@@ -31,12 +45,14 @@ sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out)
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    if (!view || !view->positions || !view->indices || view->vertex_count == 0 ||
-        view->triangle_count == 0)
+    if (!sc_mesh_layout_ok(view) || !view->positions || !view->indices || view->vertex_count == 0 ||
+        view->triangle_count == 0 || view->vertex_count > UINT32_MAX || view->triangle_count > UINT32_MAX)
         return SC_ERR_INVALID_ARGUMENT;
-    for (size_t i = 0; i < 3 * (size_t)view->vertex_count; i++)
-        if (!isfinite(view->positions[i]))
+    for (size_t i = 0; i < view->vertex_count; i++) {
+        const float *p = sc_mesh_vertex(view, i);
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
             return SC_ERR_NONFINITE;
+    }
     sc_status st = referenced_bounds(view, out->lo, out->hi);
     if (st != SC_OK)
         return st;
@@ -46,7 +62,7 @@ sc_status sc_mesh_check(const sc_mesh_view *view, sc_checked_mesh *out)
 
 sc_status sc_mesh_bounds(const sc_mesh_view *mesh, float lo[3], float hi[3])
 {
-    if (!mesh || !mesh->positions || !mesh->indices || !lo || !hi || mesh->triangle_count == 0)
+    if (!sc_mesh_layout_ok(mesh) || !mesh->positions || !mesh->indices || !lo || !hi || mesh->triangle_count == 0)
         return SC_ERR_INVALID_ARGUMENT;
     return referenced_bounds(mesh, lo, hi);
 }
@@ -75,7 +91,7 @@ static int cmp_edge(const void *pa, const void *pb)
 
 int sc_edge_table_tri_ok(const sc_edge_table *t, const sc_mesh_view *mesh, uint32_t tri)
 {
-    const uint32_t *ix = mesh->indices + 3 * (size_t)tri;
+    const uint32_t *ix = sc_mesh_triangle(mesh, tri);
     uint32_t a = t->canon[ix[0]], b = t->canon[ix[1]], c = t->canon[ix[2]];
     return a != b && b != c && a != c;
 }
@@ -95,7 +111,7 @@ sc_status sc_edge_table_build(const sc_mesh_view *mesh, sc_edge_table *out)
         return SC_ERR_OUT_OF_MEMORY;
     }
     for (size_t i = 0; i < nv; i++) {
-        memcpy(order[i].p, &mesh->positions[3 * i], sizeof order[i].p);
+        memcpy(order[i].p, sc_mesh_vertex(mesh, i), sizeof order[i].p);
         order[i].index = (uint32_t)i;
     }
     qsort(order, nv, sizeof *order, cmp_pos);
@@ -113,7 +129,7 @@ sc_status sc_edge_table_build(const sc_mesh_view *mesh, sc_edge_table *out)
     for (size_t t = 0; t < nt; t++) {
         if (!sc_edge_table_tri_ok(out, mesh, (uint32_t)t))
             continue;
-        const uint32_t *ix = mesh->indices + 3 * t;
+        const uint32_t *ix = sc_mesh_triangle(mesh, t);
         for (int e = 0; e < 3; e++) {
             uint32_t a = out->canon[ix[e]], b = out->canon[ix[(e + 1) % 3]];
             out->edges[ne].a = a < b ? a : b;

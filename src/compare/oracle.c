@@ -89,7 +89,7 @@ static sc_status mesh_prepare(const sc_checked_mesh *checked, oracle_mesh *m)
         for (int a = 0; a < 3; a++) {
             double c = 0;
             for (int j = 0; j < 3; j++)
-                c += mesh->positions[3 * (size_t)mesh->indices[3 * t + j] + a];
+                c += sc_mesh_vertex(mesh, sc_mesh_triangle(mesh, t)[j])[a];
             double ext = (double)hi[a] - lo[a];
             double f = ext > 0 ? (c / 3 - lo[a]) / ext : 0;
             f = f < 0 ? 0 : f > 1 ? 1 : f;
@@ -104,7 +104,7 @@ static sc_status mesh_prepare(const sc_checked_mesh *checked, oracle_mesh *m)
         m->id[k] = t;
         for (int j = 0; j < 3; j++)
             for (int a = 0; a < 3; a++)
-                m->v[k][3 * j + a] = mesh->positions[3 * (size_t)mesh->indices[3 * (size_t)t + j] + a];
+                m->v[k][3 * j + a] = sc_mesh_vertex(mesh, sc_mesh_triangle(mesh, t)[j])[a];
     }
     free(keys);
     for (size_t c = 0; c < m->nclusters; c++) {

@@ -42,7 +42,7 @@ static sc_status trace(const sc_tracer *t, const sc_rayset *rays, sc_rcheck_trac
     return st;
 }
 
-static sc_status classify(const sc_raster_mesh *mesh, const sc_camera *cam, const sc_raster_image *img,
+static sc_status classify(const sc_mesh_view *mesh, const sc_camera *cam, const sc_raster_image *img,
                           sc_rcheck_tracer *t, char *err, size_t errlen)
 {
     for (int y = 0; y < img->height; y++)
@@ -77,7 +77,7 @@ static sc_status add_tracer(sc_rcheck *c, const char *name, size_t npix)
     return t->ids && t->cls ? SC_OK : SC_ERR_OUT_OF_MEMORY;
 }
 
-sc_status sc_rcheck_run(const sc_raster_mesh *mesh, const sc_camera *cam, const sc_raster_image *img,
+sc_status sc_rcheck_run(const sc_mesh_view *mesh, const sc_camera *cam, const sc_raster_image *img,
                         sc_prefilter_mode prefilter, int with_embree, int want_tests, sc_rcheck *out, char *err,
                         size_t errlen)
 {
@@ -88,10 +88,8 @@ sc_status sc_rcheck_run(const sc_raster_mesh *mesh, const sc_camera *cam, const 
         return SC_ERR_LIMIT;
     }
     size_t npix = (size_t)img->width * (size_t)img->height;
-    sc_mesh_view mv = { mesh->positions, (uint32_t)mesh->vertex_count, mesh->indices,
-                        (uint32_t)mesh->triangle_count };
     sc_checked_mesh cm;
-    sc_status cst = sc_mesh_check(&mv, &cm);
+    sc_status cst = sc_mesh_check(mesh, &cm);
     if (cst != SC_OK) {
         fail(err, errlen, cst, "mesh");
         return cst;

@@ -27,7 +27,7 @@ typedef struct sc_rcheck {
 } sc_rcheck;
 
 /* Traces, classifies; on error err holds one line and *out is freed. */
-sc_status sc_rcheck_run(const sc_raster_mesh *mesh, const sc_camera *cam, const sc_raster_image *img,
+sc_status sc_rcheck_run(const sc_mesh_view *mesh, const sc_camera *cam, const sc_raster_image *img,
                         sc_prefilter_mode prefilter, int with_embree, int want_tests, sc_rcheck *out, char *err,
                         size_t errlen);
 void sc_rcheck_free(sc_rcheck *c);

@@ -105,7 +105,7 @@ static int normalize3(double v[3])
 
 static void vertex(const sc_mesh_view *m, uint32_t tri, int corner, double v[3])
 {
-    const float *p = m->positions + 3 * (size_t)m->indices[3 * (size_t)tri + corner];
+    const float *p = sc_mesh_vertex(m, sc_mesh_triangle(m, tri)[corner]);
     v[0] = p[0], v[1] = p[1], v[2] = p[2];
 }
 
@@ -443,7 +443,7 @@ sc_status sc_rayset_adversarial(const sc_checked_mesh *checked, size_t count, ui
             unit_sphere(&r, w);
             out->exact[i] = (uint8_t)aim(ray, V, 1, w, len);
             out->tag[i] = SC_RAY_TAG_VERTEX;
-            out->target[i] = et.canon[mesh->indices[3 * (size_t)t + corner]];
+            out->target[i] = et.canon[sc_mesh_triangle(mesh, t)[corner]];
             out->aim_t[i] = 1.0f;
         } else if (kind == 1 || kind == 2) {                  /* shared edge midpoint */
             uint32_t t0, va, vb;
@@ -461,11 +461,11 @@ sc_status sc_rayset_adversarial(const sc_checked_mesh *checked, size_t count, ui
             } else {
                 t0 = good[sc_rng_next(&r) % ngood];
                 int c = (int)(sc_rng_next(&r) % 3);
-                va = mesh->indices[3 * (size_t)t0 + c];
-                vb = mesh->indices[3 * (size_t)t0 + (c + 1) % 3];
+                va = sc_mesh_triangle(mesh, t0)[c];
+                vb = sc_mesh_triangle(mesh, t0)[(c + 1) % 3];
                 tri_normal(mesh, t0, nsum);
             }
-            const float *A = mesh->positions + 3 * (size_t)va, *B = mesh->positions + 3 * (size_t)vb;
+            const float *A = sc_mesh_vertex(mesh, va), *B = sc_mesh_vertex(mesh, vb);
             double S[3];
             int sum_exact = 1;
             for (int k = 0; k < 3; k++) {

@@ -71,7 +71,7 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
     memset(t, 0, sizeof *t);
     t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0 };
     sc_bvh *b;
-    sc_status st = sc_bvh_build(m->positions, m->vertex_count, m->indices, m->triangle_count, cfg, &b);
+    sc_status st = sc_bvh_build(m, cfg, &b);
     if (st != SC_OK)
         return st;
     sc_bvh_info info;

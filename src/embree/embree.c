@@ -155,7 +155,7 @@ static sc_status build_clusters(sc_embree *e, const sc_checked_mesh *checked)
         for (int a = 0; a < 3; a++) {
             double s = 0;
             for (int c = 0; c < 3; c++)
-                s += m->positions[3 * (size_t)m->indices[3 * t + c] + a];
+                s += sc_mesh_vertex(m, sc_mesh_triangle(m, t)[c])[a];
             cent[3 * t + a] = (float)(s / 3);
         }
     }
@@ -207,7 +207,7 @@ static sc_status build_clusters(sc_embree *e, const sc_checked_mesh *checked)
             e->prim[c * w + i] = t;
             for (int j = 0; j < 3; j++)
                 for (int a = 0; a < 3; a++) {
-                    float x = m->positions[3 * (size_t)m->indices[3 * (size_t)t + j] + a];
+                    float x = sc_mesh_vertex(m, sc_mesh_triangle(m, t)[j])[a];
                     v[3 * j + a] = x;
                     if (x < bx[a]) bx[a] = x;
                     if (x > bx[3 + a]) bx[3 + a] = x;
@@ -411,8 +411,10 @@ sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_confi
             sc_embree_destroy(e);
             return SC_ERR_OUT_OF_MEMORY;
         }
-        memcpy(vb, mesh->positions, 3 * sizeof(float) * mesh->vertex_count);
-        memcpy(ib, mesh->indices, 3 * sizeof(unsigned) * mesh->triangle_count);
+        for (size_t i = 0; i < mesh->vertex_count; i++)
+            memcpy(vb + 3 * i, sc_mesh_vertex(mesh, i), 3 * sizeof(float));
+        for (size_t t = 0; t < mesh->triangle_count; t++)
+            memcpy(ib + 3 * t, sc_mesh_triangle(mesh, t), 3 * sizeof(unsigned));
     } else {
         if ((st = build_clusters(e, checked)) != SC_OK) {
             sc_embree_destroy(e);
@@ -481,6 +483,14 @@ static void to_rtc(struct RTCRay *o, const sc_ray *r)
     o->time = 0, o->mask = 0xffffffffu, o->id = 0, o->flags = 0;
 }
 
+/* A miss as the Embree tracers report it (t = +inf, unlike our tracer's tmax). */
+static void hit_miss(sc_hitrec *h)
+{
+    h->t = INFINITY, h->u = h->v = 0, h->prim = SC_HITREC_MISS;
+    h->ng[0] = h->ng[1] = h->ng[2] = 0;
+    h->geom = h->inst = SC_INVALID_ID;
+}
+
 sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits,
                                sc_embree_counters *ctr)
 {
@@ -496,10 +506,12 @@ sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hi
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(e->scene, &c.rtc, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-            hits[i].t = INFINITY, hits[i].u = hits[i].v = 0, hits[i].prim = SC_HITREC_MISS;
+            hit_miss(&hits[i]);
         } else {
             hits[i].t = rh.ray.tfar, hits[i].u = rh.hit.u, hits[i].v = rh.hit.v;
             hits[i].prim = rh.hit.primID;
+            hits[i].ng[0] = rh.hit.Ng_x, hits[i].ng[1] = rh.hit.Ng_y, hits[i].ng[2] = rh.hit.Ng_z;
+            hits[i].geom = rh.hit.geomID, hits[i].inst = rh.hit.instID[0];
         }
     }
     if (ctr)
@@ -546,10 +558,13 @@ sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_
         for (int i = 0; i < W && base + (size_t)i < n; i++) {                            \
             sc_hitrec *h = &hits[base + (size_t)i];                                      \
             if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {                           \
-                h->t = INFINITY, h->u = h->v = 0, h->prim = SC_HITREC_MISS;              \
+                hit_miss(h);                                                             \
             } else {                                                                     \
                 h->t = rh.ray.tfar[i], h->u = rh.hit.u[i], h->v = rh.hit.v[i];           \
                 h->prim = rh.hit.primID[i];                                              \
+                h->ng[0] = rh.hit.Ng_x[i], h->ng[1] = rh.hit.Ng_y[i];                    \
+                h->ng[2] = rh.hit.Ng_z[i];                                               \
+                h->geom = rh.hit.geomID[i], h->inst = rh.hit.instID[0][i];               \
             }                                                                            \
         }                                                                                \
     }
@@ -633,9 +648,11 @@ sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n,
         for (unsigned i = 0; i < m; i++) {
             sc_hitrec *h = &hits[base + i];
             if (rh[i].hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-                h->t = INFINITY, h->u = h->v = 0, h->prim = SC_HITREC_MISS;
+                hit_miss(h);
             } else {
                 h->t = rh[i].ray.tfar, h->u = rh[i].hit.u, h->v = rh[i].hit.v, h->prim = rh[i].hit.primID;
+                h->ng[0] = rh[i].hit.Ng_x, h->ng[1] = rh[i].hit.Ng_y, h->ng[2] = rh[i].hit.Ng_z;
+                h->geom = rh[i].hit.geomID, h->inst = rh[i].hit.instID[0];
             }
         }
     }

@@ -19,14 +19,14 @@ static double segment_distance(double px, double py, const double a[2], const do
 }
 
 /* Distance from (px, py) to the outline of one triangle clipped at d >= dn. */
-static double triangle_edge_distance(const sc_raster_mesh *mesh, const sc_raster_view *view,
+static double triangle_edge_distance(const sc_mesh_view *mesh, const sc_raster_view *view,
                                      double near_dist, uint32_t tri_index, double px, double py)
 {
-    const uint32_t *tri = mesh->indices + 3 * (size_t)tri_index;
+    const uint32_t *tri = sc_mesh_triangle(mesh, tri_index);
     double e[3][3];
     double dmax = -INFINITY;
     for (int i = 0; i < 3; i++) {
-        sc_raster_to_eye(view, mesh->positions + 3 * (size_t)tri[i], e[i]);
+        sc_raster_to_eye(view, sc_mesh_vertex(mesh, tri[i]), e[i]);
         dmax = e[i][2] > dmax ? e[i][2] : dmax;
     }
     if (!(dmax > 0))
@@ -66,13 +66,14 @@ static double triangle_edge_distance(const sc_raster_mesh *mesh, const sc_raster
     return best;
 }
 
-sc_status sc_raster_edge_distance(const sc_raster_mesh *mesh, const sc_camera *cam,
+sc_status sc_raster_edge_distance(const sc_mesh_view *mesh, const sc_camera *cam,
                                   double near_dist, int x, int y,
                                   uint32_t id_a, uint32_t id_b, double *dist_px)
 {
     if (!mesh || !cam || !dist_px || !(near_dist >= 0) || !isfinite(near_dist))
         return SC_ERR_INVALID_ARGUMENT;
-    if ((mesh->triangle_count && !mesh->indices) || (mesh->vertex_count && !mesh->positions))
+    if (!sc_mesh_layout_ok(mesh) || (mesh->triangle_count && !mesh->indices) ||
+        (mesh->vertex_count && !mesh->positions))
         return SC_ERR_INVALID_ARGUMENT;
     if (x < 0 || y < 0 || x >= cam->width || y >= cam->height ||
         id_a > mesh->triangle_count || id_b > mesh->triangle_count)
@@ -85,11 +86,11 @@ sc_status sc_raster_edge_distance(const sc_raster_mesh *mesh, const sc_camera *c
     for (int k = 0; k < 2; k++) {
         if (!ids[k])
             continue;
-        const uint32_t *tri = mesh->indices + 3 * (size_t)(ids[k] - 1);
+        const uint32_t *tri = sc_mesh_triangle(mesh, ids[k] - 1);
         for (int i = 0; i < 3; i++) {
             if (tri[i] >= mesh->vertex_count)
                 return SC_ERR_INVALID_ARGUMENT;
-            const float *p = mesh->positions + 3 * (size_t)tri[i];
+            const float *p = sc_mesh_vertex(mesh, tri[i]);
             if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
                 return SC_ERR_NONFINITE;
         }
@@ -114,15 +115,15 @@ const char *sc_raster_diff_name(sc_raster_diff kind)
 /* Does the pixel-centre ray meet triangle index k (t > 0)? Double-precision
  * Moller-Trumbore: away from edges (the only case asked) rounding cannot
  * flip the answer. */
-static int centre_ray_t(const sc_raster_mesh *mesh, const sc_camera *cam, const sc_camera_frame *fr,
+static int centre_ray_t(const sc_mesh_view *mesh, const sc_camera *cam, const sc_camera_frame *fr,
                         uint32_t k, int x, int y, double *t_out)
 {
     double d[3], v[3][3], e1[3], e2[3], s[3], p[3], q[3];
     sc_camera_ray_dir(cam, fr, x + 0.5, y + 0.5, d);
-    const uint32_t *tri = mesh->indices + 3 * (size_t)k;
+    const uint32_t *tri = sc_mesh_triangle(mesh, k);
     for (int j = 0; j < 3; j++)
         for (int i = 0; i < 3; i++)
-            v[j][i] = mesh->positions[3 * (size_t)tri[j] + i];
+            v[j][i] = sc_mesh_vertex(mesh, tri[j])[i];
     for (int i = 0; i < 3; i++) {
         e1[i] = v[1][i] - v[0][i];
         e2[i] = v[2][i] - v[0][i];
@@ -146,7 +147,7 @@ static int centre_ray_t(const sc_raster_mesh *mesh, const sc_camera *cam, const 
     return 1;
 }
 
-sc_status sc_raster_classify(const sc_raster_mesh *mesh, const sc_camera *cam,
+sc_status sc_raster_classify(const sc_mesh_view *mesh, const sc_camera *cam,
                              const sc_raster_image *img, int x, int y, uint32_t other_id,
                              sc_raster_diff *kind, double *edge_px)
 {

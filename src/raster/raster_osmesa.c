@@ -118,7 +118,7 @@ static sc_status gl_status(sc_raster_image *out, const char *where)
 
 /* Everything one render needs once inputs are validated. */
 typedef struct raster_job {
-    const sc_raster_mesh *mesh;
+    const sc_mesh_view *mesh;
     const sc_raster_view *view;
     const double *d;             /* per vertex: eye-space depth */
     double near_dist, far_dist;
@@ -131,7 +131,7 @@ typedef struct raster_job {
 static void clip_coords(const raster_job *job, uint32_t vi, float out[4])
 {
     double e[3];
-    sc_raster_to_eye(job->view, job->mesh->positions + 3 * (size_t)vi, e);
+    sc_raster_to_eye(job->view, sc_mesh_vertex(job->mesh, vi), e);
     double d = e[2], n = job->near_dist, f = job->far_dist;
     out[0] = (float)(e[0] / job->view->frame.half_w);
     out[1] = (float)(e[1] / job->view->frame.half_h);
@@ -160,12 +160,11 @@ static sc_status draw_triangles(const raster_job *job, sc_raster_image *out)
     glEnableClientState(GL_COLOR_ARRAY);
     glVertexPointer(4, GL_FLOAT, 0, vbuf);
     glColorPointer(4, GL_UNSIGNED_BYTE, 0, cbuf);
-    const uint32_t *idx = job->mesh->indices;
     for (size_t t0 = 0; t0 < nt; t0 += chunk) {
         size_t k = nt - t0 < chunk ? nt - t0 : chunk;
         size_t m = 0;
         for (size_t t = t0; t < t0 + k; t++) {
-            const uint32_t *tri = idx + 3 * t;
+            const uint32_t *tri = sc_mesh_triangle(job->mesh, t);
             /* Triangles wholly behind the near plane cannot show; skipping
              * them keeps the clipper's work proportional to what is visible. */
             double n = job->near_dist;
@@ -417,7 +416,7 @@ done:
 /* The preview shades from the ID buffer: flat per-face lighting is a
  * function of the visible triangle alone, so this equals a second lit GL
  * pass with the same visibility, at no extra raster cost. */
-static void shade_preview(const sc_raster_mesh *mesh, const sc_raster_view *view,
+static void shade_preview(const sc_mesh_view *mesh, const sc_raster_view *view,
                           const sc_camera *cam, const sc_raster_options *opt,
                           sc_raster_image *out)
 {
@@ -447,10 +446,10 @@ static void shade_preview(const sc_raster_mesh *mesh, const sc_raster_view *view
                 memcpy(o, opt->background, 3);
                 continue;
             }
-            const uint32_t *tri = mesh->indices + 3 * (size_t)(id - 1);
-            const float *a = mesh->positions + 3 * (size_t)tri[0];
-            const float *b = mesh->positions + 3 * (size_t)tri[1];
-            const float *c = mesh->positions + 3 * (size_t)tri[2];
+            const uint32_t *tri = sc_mesh_triangle(mesh, id - 1);
+            const float *a = sc_mesh_vertex(mesh, tri[0]);
+            const float *b = sc_mesh_vertex(mesh, tri[1]);
+            const float *c = sc_mesh_vertex(mesh, tri[2]);
             double u[3], v[3], nrm[3], dir[3];
             for (int i = 0; i < 3; i++) {
                 u[i] = (double)b[i] - a[i];
@@ -470,7 +469,7 @@ static void shade_preview(const sc_raster_mesh *mesh, const sc_raster_view *view
             }
             double shade = 0.15 + 0.85 * lambert;
             for (int i = 0; i < 3; i++) {
-                double base = mesh->colors ? mesh->colors[3 * (size_t)(id - 1) + i] : 0.8;
+                double base = opt->colors ? opt->colors[3 * (size_t)(id - 1) + i] : 0.8;
                 double val = base * shade * 255 + 0.5;
                 o[i] = (uint8_t)(val < 0 ? 0 : val > 255 ? 255 : val);
             }
@@ -478,11 +477,15 @@ static void shade_preview(const sc_raster_mesh *mesh, const sc_raster_view *view
     }
 }
 
-static sc_status validate(const sc_raster_mesh *mesh, const sc_camera *cam,
+static sc_status validate(const sc_mesh_view *mesh, const sc_camera *cam,
                           const sc_raster_options *opt, sc_raster_image *out)
 {
     if (!mesh || !cam) {
         set_error(out, "NULL mesh or camera");
+        return SC_ERR_INVALID_ARGUMENT;
+    }
+    if (!sc_mesh_layout_ok(mesh)) {
+        set_error(out, "mesh strides must be 0 or multiples of 4 from 12, arrays 4-byte aligned");
         return SC_ERR_INVALID_ARGUMENT;
     }
     if ((mesh->vertex_count && !mesh->positions) || (mesh->triangle_count && !mesh->indices)) {
@@ -508,17 +511,20 @@ static sc_status validate(const sc_raster_mesh *mesh, const sc_camera *cam,
         set_error(out, "image size %dx%d out of range", cam->width, cam->height);
         return cam->width < 1 || cam->height < 1 ? SC_ERR_INVALID_ARGUMENT : SC_ERR_LIMIT;
     }
-    for (size_t i = 0; i < 3 * mesh->vertex_count; i++)
-        if (!isfinite(mesh->positions[i])) {
-            set_error(out, "vertex %zu has a non-finite coordinate", i / 3);
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        const float *p = sc_mesh_vertex(mesh, i);
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
+            set_error(out, "vertex %zu has a non-finite coordinate", i);
             return SC_ERR_NONFINITE;
         }
-    for (size_t i = 0; i < 3 * mesh->triangle_count; i++)
-        if (mesh->indices[i] >= mesh->vertex_count) {
-            set_error(out, "triangle %zu refers to vertex %u of %zu", i / 3,
-                      (unsigned)mesh->indices[i], mesh->vertex_count);
-            return SC_ERR_INVALID_ARGUMENT;
-        }
+    }
+    for (size_t t = 0; t < mesh->triangle_count; t++)
+        for (int c = 0; c < 3; c++)
+            if (sc_mesh_triangle(mesh, t)[c] >= mesh->vertex_count) {
+                set_error(out, "triangle %zu refers to vertex %u of %zu", t,
+                          (unsigned)sc_mesh_triangle(mesh, t)[c], mesh->vertex_count);
+                return SC_ERR_INVALID_ARGUMENT;
+            }
     return SC_OK;
 }
 
@@ -531,9 +537,8 @@ static void choose_clip(const raster_job *job, const sc_raster_options *opt,
 {
     double dmin = INFINITY, dmax = -INFINITY;
     int behind = 0;
-    const uint32_t *idx = job->mesh->indices;
     for (size_t i = 0; i < 3 * job->mesh->triangle_count; i++) {
-        double d = job->d[idx[i]];
+        double d = job->d[sc_mesh_triangle(job->mesh, i / 3)[i % 3]];
         if (d > 0) {
             dmin = d < dmin ? d : dmin;
             dmax = d > dmax ? d : dmax;
@@ -562,7 +567,7 @@ static void choose_clip(const raster_job *job, const sc_raster_options *opt,
     *far_out = f;
 }
 
-sc_status sc_raster_render(const sc_raster_mesh *mesh, const sc_camera *cam,
+sc_status sc_raster_render(const sc_mesh_view *mesh, const sc_camera *cam,
                            const sc_raster_options *opt_in, sc_raster_image *out)
 {
     if (!out)
@@ -597,7 +602,7 @@ sc_status sc_raster_render(const sc_raster_mesh *mesh, const sc_camera *cam,
     out->height = cam->height;
     for (size_t i = 0; i < mesh->vertex_count; i++) {
         double e[3];
-        sc_raster_to_eye(&view, mesh->positions + 3 * i, e);
+        sc_raster_to_eye(&view, sc_mesh_vertex(mesh, i), e);
         d[i] = e[2];
     }
     raster_job job = { .mesh = mesh, .view = &view, .d = d,

@@ -96,14 +96,14 @@ static void shade_pixel(const ctx *c, int px, int py, float rgb[3], float *value
         *value = (float)(n ? n : st->trace.tri_tests - before.tri_tests);
         return;
     }
-    if (s != SC_OK || hit.prim == SC_HITREC_MISS || hit.prim >= v->num_triangles) {
+    if (s != SC_OK || hit.prim == SC_HITREC_MISS || hit.prim >= v->mesh.triangle_count) {
         for (int i = 0; i < 3; i++)
             rgb[i] = c->o->debug == SC_RENDER_SHADED ? v->background[i] : 0.0f;
         return;
     }
-    const uint32_t *ix = v->indices + 3 * (size_t)hit.prim;
-    const float *a = v->positions + 3 * (size_t)ix[0], *b = v->positions + 3 * (size_t)ix[1],
-                *cc = v->positions + 3 * (size_t)ix[2];
+    const uint32_t *ix = sc_mesh_triangle(&v->mesh, hit.prim);
+    const float *a = sc_mesh_vertex(&v->mesh, ix[0]), *b = sc_mesh_vertex(&v->mesh, ix[1]),
+                *cc = sc_mesh_vertex(&v->mesh, ix[2]);
     double e0[3], e1[3], n[3], p[3];
     for (int i = 0; i < 3; i++) {
         e0[i] = (double)b[i] - a[i];
@@ -233,7 +233,7 @@ static void heat_color(double x, uint8_t out[3])
 sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_options *opt,
                     sc_image *out, sc_render_stats *stats)
 {
-    if (!v || !bvh || !out || (v->num_triangles && (!v->positions || !v->indices || !v->mesh_ids)) ||
+    if (!v || !bvh || !out || !sc_mesh_layout_ok(&v->mesh) || (v->mesh.triangle_count && (!v->mesh.positions || !v->mesh.indices || !v->mesh_ids)) ||
         (v->num_meshes && !v->mesh_colors) || (v->num_lights && !v->lights))
         return SC_ERR_INVALID_ARGUMENT;
     sc_render_options defaults;
@@ -247,7 +247,7 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
     ctx c = { .v = v, .bvh = bvh, .o = opt };
     if (sc_camera_frame_make(&v->camera, &c.frame) != SC_OK)
         return SC_ERR_INVALID_ARGUMENT;
-    for (size_t t = 0; t < v->num_triangles; t++)
+    for (size_t t = 0; t < v->mesh.triangle_count; t++)
         if (v->mesh_ids[t] >= v->num_meshes)
             return SC_ERR_INVALID_ARGUMENT;
     const int w = v->camera.width, h = v->camera.height;
@@ -258,8 +258,8 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
     /* Offsets scale with the scene: 1e-4 of the diagonal, as the shared ray
      * sets do (sc_rays.h), and never below float resolution at the hit. */
     double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (size_t k = 0; k < 3 * v->num_triangles; k++) {
-        const float *p = v->positions + 3 * (size_t)v->indices[k];
+    for (size_t k = 0; k < 3 * v->mesh.triangle_count; k++) {
+        const float *p = sc_mesh_vertex(&v->mesh, sc_mesh_triangle(&v->mesh, k / 3)[k % 3]);
         for (int i = 0; i < 3; i++) {
             lo[i] = fmin(lo[i], p[i]);
             hi[i] = fmax(hi[i], p[i]);

@@ -23,7 +23,7 @@ void sc_proc_free(sc_proc_mesh *m)
 
 sc_mesh_view sc_proc_view(const sc_proc_mesh *m)
 {
-    sc_mesh_view v = { m->positions, m->vertex_count, m->indices, m->triangle_count };
+    sc_mesh_view v = { m->positions, m->vertex_count, m->indices, m->triangle_count, 0, 0 };
     return v;
 }
 

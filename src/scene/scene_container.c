@@ -473,13 +473,14 @@ sc_status sc_scene_get_view(const sc_scene *s, sc_scene_view *v)
 {
     if (!s || !v)
         return SC_ERR_INVALID_ARGUMENT;
-    v->positions = s->positions;
-    v->indices = s->indices;
+    memset(&v->mesh, 0, sizeof v->mesh);
+    v->mesh.positions = s->positions;
+    v->mesh.indices = s->indices;
     v->mesh_ids = s->mesh_ids;
     v->mesh_colors = s->mesh_colors;
     v->lights = s->lights;
-    v->num_vertices = s->num_vertices;
-    v->num_triangles = s->num_triangles;
+    v->mesh.vertex_count = s->num_vertices;
+    v->mesh.triangle_count = s->num_triangles;
     v->num_meshes = s->num_meshes;
     v->num_lights = s->num_lights;
     v->camera = s->camera;

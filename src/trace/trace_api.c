@@ -81,6 +81,30 @@ static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 
  * int32_t occlusion array (any). The level's kernel of that width; a
  * 16-ray packet on a level with 8-lane kernels as two halves; lane by lane
  * through the single-ray kernels where the level or test has none. */
+
+/* Lane i of an 8- or 16-lane hit packet (sc_hit.h: nine rows of W, in the
+ * order t, u, v, prim, ng_x, ng_y, ng_z, geom, inst) to and from a hit
+ * record. */
+static void hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h)
+{
+    float *f = packet;
+    uint32_t *u = packet;
+    f[i] = h->t, f[W + i] = h->u, f[2 * W + i] = h->v;
+    u[3 * W + i] = h->prim;
+    f[4 * W + i] = h->ng[0], f[5 * W + i] = h->ng[1], f[6 * W + i] = h->ng[2];
+    u[7 * W + i] = h->geom, u[8 * W + i] = h->inst;
+}
+
+static void hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h)
+{
+    const float *f = packet;
+    const uint32_t *u = packet;
+    h->t = f[i], h->u = f[W + i], h->v = f[2 * W + i];
+    h->prim = u[3 * W + i];
+    h->ng[0] = f[4 * W + i], h->ng[1] = f[5 * W + i], h->ng[2] = f[6 * W + i];
+    h->geom = u[7 * W + i], h->inst = u[8 * W + i];
+}
+
 static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
                               int any, sc_trace_stats *stats)
 {
@@ -118,8 +142,10 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
                 sc_hit_packet16 *h16 = out;
                 k->closest_p8(bvh, &r8, hl, &h8, stats);
                 for (uint32_t e = hl; e; e &= e - 1) {
-                    const unsigned i = (unsigned)__builtin_ctz(e), j = 8 * h + i;
-                    h16->t[j] = h8.t[i], h16->u[j] = h8.u[i], h16->v[j] = h8.v[i], h16->prim[j] = h8.prim[i];
+                    const unsigned i = (unsigned)__builtin_ctz(e);
+                    sc_hitrec one;
+                    hit_lane_get(&h8, 8, i, &one);
+                    hit_lane_put(h16, 16, 8 * h + i, &one);
                 }
             }
         }
@@ -138,10 +164,7 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
             k->closest_stats(bvh, &r, &h, stats);
         else
             k->closest(bvh, &r, &h);
-        /* the t, u, v, prim rows of an 8- or 16-lane hit packet */
-        float *hf = out;
-        hf[i] = h.t, hf[W + i] = h.u, hf[2 * W + i] = h.v;
-        ((uint32_t *)out)[3 * W + i] = h.prim;
+        hit_lane_put(out, W, i, &h);
     }
     return SC_OK;
 }
@@ -292,8 +315,9 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
         sc_hit_packet16 h __attribute__((aligned(64)));
         if (sc_trace_closest16(bvh, valid, &p, &h, stats) == SC_OK) {
             for (unsigned i = 0; i < cnt; i++) {
-                sc_hitrec *o = (sc_hitrec *)(void *)OUT(i);
-                o->t = h.t[i], o->u = h.u[i], o->v = h.v[i], o->prim = h.prim[i];
+                sc_hitrec one;
+                hit_lane_get(&h, 16, i, &one);
+                memcpy(OUT(i), &one, sizeof one);
             }
             return SC_OK;
         }

@@ -4,8 +4,24 @@
 #ifndef SPHERECULL_TRACE_TRACE_KERNELS_H
 #define SPHERECULL_TRACE_TRACE_KERNELS_H
 
+#include "bvh/leaf_block.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_trace.h"
+
+/* A hit's fields beyond t, u, v and prim: the normal of lane `lane` of the
+ * leaf rows it came from (rows NULL: a miss) and the ids of a BVH over one
+ * mesh (geometry 0, no instance). */
+static inline void sc_hit_ids_normal(sc_hitrec *h, const float *rows, unsigned W, unsigned lane)
+{
+    if (rows) {
+        sc_leaf_normal(rows, W, lane, h->ng);
+        h->geom = 0;
+    } else {
+        h->ng[0] = h->ng[1] = h->ng[2] = 0;
+        h->geom = SC_INVALID_ID;
+    }
+    h->inst = SC_INVALID_ID;
+}
 
 typedef struct sc_trace_kernels {
     void (*closest)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);

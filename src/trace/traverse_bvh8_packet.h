@@ -299,8 +299,8 @@ SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 
  * lane's best t so far; a hit replaces the lane's best by the (t, prim)
  * order. The single kernel returns u and v divided out: den = 1. */
 SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref, uint32_t m, pvec *tmaxv,
-                                  pvec *bun, pvec *bvn, pvec *bden, uint32_t *bprim, uint32_t *alive,
-                                  sc_trace_stats *st, const int ANY, const int STATS)
+                                  pvec *bun, pvec *bvn, pvec *bden, uint32_t *bprim, float (*bng)[PK],
+                                  uint32_t *alive, sc_trace_stats *st, const int ANY, const int STATS)
 {
     float tm[PK], un[PK], vn[PK], dn[PK];
     PV(store)(tm, *tmaxv);
@@ -326,6 +326,7 @@ SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref,
         } else if (h.prim != SC_HITREC_MISS && (h.t < tm[l] || h.prim < bprim[l])) {
             tm[l] = h.t, un[l] = h.u, vn[l] = h.v, dn[l] = 1;
             bprim[l] = h.prim;
+            bng[0][l] = h.ng[0], bng[1][l] = h.ng[1], bng[2][l] = h.ng[2];
         }
     }
     if (!ANY) {
@@ -351,6 +352,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
     /* the best hit so far per lane (closest): its t is tmaxv */
     pvec bun = PV(set1)(0), bvn = PV(set1)(0), bden = PV(set1)(1);
     uint32_t bprim[PK] __attribute__((aligned(64)));
+    float bng[3][PK];             /* its geometric normal (sc_leaf_normal) */
     for (unsigned i = 0; i < PK; i++)
         bprim[i] = SC_HITREC_MISS;
     uint32_t alive = lanes;       /* any: lanes not yet occluded */
@@ -374,7 +376,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             if (__builtin_popcount(m) <= SC_PACKET_THIN) {
                 /* a thin packet: its lanes finish this subtree as single
                  * rays, each bounded by its own best hit so far */
-                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, bprim, &alive, st, ANY, STATS);
+                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, bprim, bng, &alive, st, ANY, STATS);
                 goto pop;
             }
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
@@ -547,8 +549,15 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                         bun = PV(sel)(um, V, bun);
                         bvn = PV(sel)(um, Wv, bvn);
                         bden = PV(sel)(um, det, bden);
-                        for (uint32_t e = upd; e; e &= e - 1)
-                            bprim[__builtin_ctz(e)] = prims[i];
+                        if (upd) {
+                            float ng[3];
+                            sc_leaf_normal(rows, W, i, ng);
+                            for (uint32_t e = upd; e; e &= e - 1) {
+                                const unsigned l = (unsigned)__builtin_ctz(e);
+                                bprim[l] = prims[i];
+                                bng[0][l] = ng[0], bng[1][l] = ng[1], bng[2][l] = ng[2];
+                            }
+                        }
                     }
                 }
                 if (__builtin_expect(zr != 0, 0)) {
@@ -574,6 +583,9 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                         } else if (t < tm[l] || prims[i] < bprim[l]) {
                             tm[l] = t, un[l] = u, vn[l] = v, dn[l] = 1;
                             bprim[l] = prims[i];
+                            float ng[3];
+                            sc_leaf_normal(rows, W, i, ng);
+                            bng[0][l] = ng[0], bng[1][l] = ng[1], bng[2][l] = ng[2];
                         }
                     }
                     tmaxv = PV(load)(tm), bun = PV(load)(un), bvn = PV(load)(vn), bden = PV(load)(dn);
@@ -613,6 +625,11 @@ done:
             hit->t[l] = miss ? r->tmax[l] : tm[l];
             hit->u[l] = miss ? 0 : u[l];
             hit->v[l] = miss ? 0 : v[l];
+            hit->ng_x[l] = miss ? 0 : bng[0][l];
+            hit->ng_y[l] = miss ? 0 : bng[1][l];
+            hit->ng_z[l] = miss ? 0 : bng[2][l];
+            hit->geom[l] = miss ? SC_INVALID_ID : 0;
+            hit->inst[l] = SC_INVALID_ID;
         }
     }
 }
@@ -646,6 +663,8 @@ SC_X86_INLINE void PFN(packet_entry)(const sc_bvh *bvh, const PKT *r, uint32_t l
         else
             closest_watertight(bvh, &ray, &h);
         hit->t[l] = h.t, hit->u[l] = h.u, hit->v[l] = h.v, hit->prim[l] = h.prim;
+        hit->ng_x[l] = h.ng[0], hit->ng_y[l] = h.ng[1], hit->ng_z[l] = h.ng[2];
+        hit->geom[l] = h.geom, hit->inst[l] = h.inst;
     }
 }
 

@@ -81,6 +81,7 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
     hit->prim = SC_HITREC_MISS;
     hit->t = ray->tmax;
     hit->u = hit->v = 0;
+    sc_hit_ids_normal(hit, NULL, 0, 0);
     if (!bvh->has_root)
         return SC_OK;
     const int test = bvh->cfg.tri_test;
@@ -107,6 +108,7 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
                     hit->t = xb.t;
                     hit->u = xb.u;
                     hit->v = xb.v;
+                    sc_hit_ids_normal(hit, xb.rows, xb.W, xb.lane);
                 }
                 continue;
             }
@@ -118,6 +120,7 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
                 hit->prim = prims[bi];
                 hit->u = un[bi] / den[bi];
                 hit->v = vn[bi] / den[bi];
+                sc_hit_ids_normal(hit, rows, W, bi);
             }
         }
     }

@@ -48,6 +48,8 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     sc_ray cur = *ray;
     uint32_t best_prim = SC_HITREC_MISS;
     float best_u = 0, best_v = 0;
+    const float *best_rows = NULL;     /* the best hit's leaf rows and lane, for its normal */
+    unsigned best_w = 0, best_lane = 0;
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
     if (STATS)
@@ -154,6 +156,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
                         best_prim = prims[bi];
                         best_u = un[bi] / den[bi];
                         best_v = vn[bi] / den[bi];
+                        best_rows = rows, best_w = W, best_lane = bi;
                     }
                 }
             }
@@ -173,6 +176,7 @@ done:
         hit->t = xb.have ? xb.t : ray->tmax;
         hit->u = xb.have ? xb.u : 0;
         hit->v = xb.have ? xb.v : 0;
+        sc_hit_ids_normal(hit, xb.have ? xb.rows : NULL, xb.W, xb.lane);
         return 0;
     }
     if (!ANY) {
@@ -180,6 +184,7 @@ done:
         hit->t = best_prim == SC_HITREC_MISS ? ray->tmax : tmax;
         hit->u = best_u;
         hit->v = best_v;
+        sc_hit_ids_normal(hit, best_prim == SC_HITREC_MISS ? NULL : best_rows, best_w, best_lane);
     }
     return 0;
 }

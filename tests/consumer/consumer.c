@@ -64,6 +64,9 @@ static void check_bvh(const sc_bvh *bvh)
     sc_ray r = { { 0.25f, 0.5f, -2.0f }, 0.0f, { 0.0f, 0.0f, 1.0f }, INFINITY };
     CHECK(sc_trace_closest(bvh, &r, &h, NULL) == SC_OK);
     CHECK(h.t == 2.0f && (h.prim == 0 || h.prim == 1));
+    /* Both triangles of the face have (V1 - V0) x (V2 - V0) = (0, 0, 1). */
+    CHECK(h.ng[0] == 0.0f && h.ng[1] == 0.0f && h.ng[2] == 1.0f);
+    CHECK(h.geom == 0 && h.inst == SC_INVALID_ID);
     if (h.prim != SC_HITREC_MISS) {
         float p[3];
         hit_point(&h, p);
@@ -84,6 +87,7 @@ static void check_bvh(const sc_bvh *bvh)
     /* Beside the cube: a miss. */
     sc_ray out = { { 2.0f, 2.0f, 2.0f }, 0.0f, { 1.0f, 0.0f, 0.0f }, INFINITY };
     CHECK(sc_trace_closest(bvh, &out, &h, NULL) == SC_OK && h.prim == SC_HITREC_MISS);
+    CHECK(h.geom == SC_INVALID_ID && h.ng[0] == 0.0f && h.ng[1] == 0.0f && h.ng[2] == 0.0f);
 
     /* A NaN direction is refused with a status, not a crash. */
     sc_ray bad = r;
@@ -109,7 +113,7 @@ static void check_bvh(const sc_bvh *bvh)
     CHECK(sc_trace_closest16(bvh, valid, &pk, &ph, NULL) == SC_OK);
     CHECK(sc_trace_closest_n(bvh, rays, sizeof rays[0], stream, sizeof stream[0], 16, 0, NULL) == SC_OK);
     for (int i = 0; i < 16; i++) {
-        CHECK(ph.t[i] == single[i].t && ph.prim[i] == single[i].prim);
+        CHECK(ph.t[i] == single[i].t && ph.prim[i] == single[i].prim && ph.ng_z[i] == 1.0f);
         CHECK(memcmp(&stream[i], &single[i], sizeof single[i]) == 0);
     }
 }
@@ -138,7 +142,7 @@ int main(void)
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     sc_bvh *bvh = NULL;
-    CHECK(sc_bvh_build(cube_pos, 8, cube_idx, 12, &cfg, &bvh) == SC_OK);
+    CHECK(sc_bvh_build(&(sc_mesh_view){ cube_pos, 8, cube_idx, 12, 0, 0 }, &cfg, &bvh) == SC_OK);
     if (!bvh)
         return 1;
     int levels = 0;

@@ -44,8 +44,8 @@ int main()
     sc_bvh_config_default(&cfg);
     cfg.tri_test = SC_TRI_EXACT;
     sc_bvh *bvh = nullptr;
-    CHECK(sc_bvh_build(cube_pos.data(), cube_pos.size() / 3, cube_idx.data(), cube_idx.size() / 3, &cfg,
-                       &bvh) == SC_OK);
+    const sc_mesh_view mesh = { cube_pos.data(), cube_pos.size() / 3, cube_idx.data(), cube_idx.size() / 3, 0, 0 };
+    CHECK(sc_bvh_build(&mesh, &cfg, &bvh) == SC_OK);
     if (!bvh)
         return 1;
 

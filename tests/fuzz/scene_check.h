@@ -49,14 +49,14 @@ static void fz_check_scene(const sc_scene *s, uint64_t max_triangles)
     sc_scene_stats st;
     fz_require(sc_scene_get_view(s, &v) == SC_OK);
     fz_require(sc_scene_get_stats(s, &st) == SC_OK);
-    fz_require(v.num_triangles <= max_triangles);
-    fz_require(st.triangles == v.num_triangles && st.vertices == v.num_vertices);
+    fz_require(v.mesh.triangle_count <= max_triangles);
+    fz_require(st.triangles == v.mesh.triangle_count && st.vertices == v.mesh.vertex_count);
     fz_require(st.degenerate_triangles <= st.triangles);
-    for (size_t i = 0; i < 3 * v.num_vertices; i++)
-        fz_require(isfinite(v.positions[i]));
-    for (size_t i = 0; i < 3 * v.num_triangles; i++)
-        fz_require(v.indices[i] < v.num_vertices);
-    for (size_t i = 0; i < v.num_triangles; i++)
+    for (size_t i = 0; i < 3 * v.mesh.vertex_count; i++)
+        fz_require(isfinite(v.mesh.positions[i]));
+    for (size_t i = 0; i < 3 * v.mesh.triangle_count; i++)
+        fz_require(v.mesh.indices[i] < v.mesh.vertex_count);
+    for (size_t i = 0; i < v.mesh.triangle_count; i++)
         fz_require(v.mesh_ids[i] < v.num_meshes);
     for (size_t i = 0; i < 3 * v.num_meshes; i++)
         fz_require(v.mesh_colors[i] >= 0 && v.mesh_colors[i] <= 1);

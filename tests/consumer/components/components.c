@@ -31,7 +31,7 @@ int main(int argc, char **argv)
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     sc_bvh *bvh;
-    if (sc_bvh_build(v.positions, v.num_vertices, v.indices, v.num_triangles, &cfg, &bvh) != SC_OK)
+    if (sc_bvh_build(&v.mesh, &cfg, &bvh) != SC_OK)
         return FAIL("bvh build");
 
     sc_render_options opt;
@@ -57,12 +57,11 @@ int main(int argc, char **argv)
     if (sc_trace_closest(bvh, &ray, &ours, NULL) != SC_OK || ours.prim == SC_HITREC_MISS)
         return FAIL("our tracer missed the sphere");
 #ifdef SC_HAVE_EMBREE
-    sc_mesh_view mv = { v.positions, (uint32_t)v.num_vertices, v.indices, (uint32_t)v.num_triangles };
     sc_checked_mesh cm;
     sc_embree_config ecfg;
     sc_embree_config_default(&ecfg);
     sc_embree *e;
-    if (sc_mesh_check(&mv, &cm) != SC_OK || sc_embree_create(&cm, &ecfg, &e) != SC_OK)
+    if (sc_mesh_check(&v.mesh, &cm) != SC_OK || sc_embree_create(&cm, &ecfg, &e) != SC_OK)
         return FAIL("embree create");
     sc_hitrec theirs;
     if (sc_embree_intersect1(e, &ray, 1, &theirs, NULL) != SC_OK || theirs.prim == SC_HITREC_MISS)
@@ -77,7 +76,7 @@ int main(int argc, char **argv)
     sc_raster_options_default(&ropt);
     printf("raster ");
 #endif
-    printf("scene render: ok (%zu triangles, hit at t = %g)\n", v.num_triangles, ours.t);
+    printf("scene render: ok (%zu triangles, hit at t = %g)\n", v.mesh.triangle_count, ours.t);
     sc_bvh_free(bvh);
     sc_scene_free(scene);
     return 0;
