@@ -67,5 +67,37 @@ sed -n 2p c.csv | grep -q '^"a,b.obj",4,primary,spherecull-off,' || no "compare 
 [ "$(stat -c %a c.csv 2>/dev/null)" = 640 ] || no "c.csv has mode $(stat -c %a c.csv 2>/dev/null), wanted 640"
 [ "$(ls -A | grep -c tmp)" -eq 0 ] || no "temporary files left: $(ls -A | grep tmp)"
 
+# the yardstick in every compare row: the Embree it loaded, the faster of
+# Embree's medium and high builds (checked here from the rows themselves),
+# the MXCSR mode and the loops per timed run
+if "$S" compare --help | grep -q 'embree-high'; then
+  cp 'a,b.obj' tet.obj      # no comma in the scene field: the checks below split on commas
+  "$S" compare tet.obj --repeats 1 --count 64 --oracle-rays 0 --width 16 --rays primary,random \
+      --tracers spherecull-off,embree,embree-high --threads 1 --min-time 0.01 --csv=y.csv >y.err 2>/dev/null ||
+    no "compare with embree, embree-high: exit status $?"
+  grep -q '^embree: 3\.[0-9]*\.[0-9]* /.*libembree3' y.err || no "compare does not name the Embree it loaded: $(cat y.err)"
+  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+           { m[$c["rays"] "/" $c["tracer"]] = $c["mrays_per_s"]; row[NR] = $0 }
+           END {
+             bad = 0
+             for (r in row) {
+               split(row[r], f, ",")
+               if (f[c["tracer"]] != "spherecull-off") continue
+               k = f[c["rays"]]; e = m[k "/embree"]; h = m[k "/embree-high"]
+               best = e > h ? e : h; name = e > h ? "embree" : "embree-high"
+               want = f[c["mrays_per_s"]] / best
+               if (f[c["best_embree_tracer"]] != name) { print "best_embree_tracer " f[c["best_embree_tracer"]] ", wanted " name; bad = 1 }
+               if (f[c["best_embree"]] - want > 0.002 * want || want - f[c["best_embree"]] > 0.002 * want) { print "best_embree " f[c["best_embree"]] ", wanted " want; bad = 1 }
+               if (f[c["embree_build"]] !~ /libembree3/) { print "embree_build " f[c["embree_build"]]; bad = 1 }
+               if (f[c["mxcsr"]] != "ftz" || f[c["loops"]] < 1) { print "mxcsr/loops " f[c["mxcsr"]] " " f[c["loops"]]; bad = 1 }
+               n++
+             }
+             if (n != 2) { print n " spherecull-off rows"; bad = 1 }
+             exit bad
+           }' y.csv > y.out || no "compare yardstick columns: $(cat y.out)"
+fi
+"$S" compare 'a,b.obj' --mxcsr fast > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --mxcsr fast: not a usage error"
+"$S" compare 'a,b.obj' --min-time -1 > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --min-time -1: not a usage error"
+
 [ "$fail" -eq 0 ] && echo "cli_options: all passed"
 exit "$fail"

@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
@@ -15,6 +16,8 @@
 #include "compare/oracle.h"
 #include "sc_test_checked.h"
 #include "scene/procedural.h"
+#include <embree3/rtcore.h>
+
 #include "spherecull/sc_embree.h"
 #include "spherecull/sc_trace.h"
 
@@ -85,8 +88,8 @@ static void test_native_matches_oracle_away_from_edges(void **state)
         assert_int_equal(sc_trace_closest(bvh, &rays[i], &ours[i], NULL), SC_OK);
     sc_bvh_free(bvh);
     const sc_embree_mode modes[] = { SC_EMBREE_DEFAULT, SC_EMBREE_ROBUST, SC_EMBREE_USER_PREFILTER,
-                                     SC_EMBREE_USER_PLAIN };
-    for (int mi = 0; mi < 4; mi++)
+                                     SC_EMBREE_USER_PLAIN, SC_EMBREE_COMPACT };
+    for (int mi = 0; mi < 5; mi++)
         for (int q = 0; q < 2; q++) {
             sc_embree *e = make(&m, modes[mi], q ? 16 : 8, (sc_embree_quality)q);
             assert_int_equal(sc_embree_intersect1(e, rays, N, h, NULL), SC_OK);
@@ -242,9 +245,28 @@ static void test_memory_and_arguments(void **state)
     sc_proc_free(&pm);
 }
 
+/* The yardstick names itself: the version a device reports (it must be
+ * the major version of the headers we compiled against) and the shared
+ * object the symbols came from. */
+static void test_version(void **state)
+{
+    (void)state;
+    char v[128], small[4];
+    assert_int_equal(sc_embree_version(v, sizeof v), SC_OK);
+    int major = -1, minor = -1, patch = -1, used = 0;
+    assert_int_equal(sscanf(v, "%d.%d.%d %n", &major, &minor, &patch, &used), 3);
+    assert_int_equal(major, RTC_VERSION_MAJOR);
+    assert_true(used > 0 && v[used] == '/');
+    assert_non_null(strstr(v, "libembree3"));
+    assert_int_equal(sc_embree_version(small, sizeof small), SC_OK);   /* truncated, terminated */
+    assert_int_equal(strlen(small), 3);
+    assert_int_equal(sc_embree_version(NULL, 8), SC_ERR_INVALID_ARGUMENT);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_version),
         cmocka_unit_test(test_native_matches_oracle_away_from_edges),
         cmocka_unit_test(test_packets_match_single_rays),
         cmocka_unit_test(test_user_prefilter_no_lost_hits),

@@ -49,6 +49,7 @@ typedef enum sc_embree_mode {
     SC_EMBREE_ROBUST,
     SC_EMBREE_USER_PREFILTER,
     SC_EMBREE_USER_PLAIN,
+    SC_EMBREE_COMPACT,         /* native triangles, RTC_SCENE_FLAG_COMPACT: Embree's memory-lean layout */
     SC_EMBREE_MODE_COUNT
 } sc_embree_mode;
 
@@ -68,6 +69,12 @@ typedef struct sc_embree_config {
 
 /* DEFAULT mode, medium quality, clusters of 8, minimal spheres, default threads. */
 SC_API void sc_embree_config_default(sc_embree_config *cfg);
+
+/* Which Embree this process runs: "MAJOR.MINOR.PATCH PATH" (the version a
+ * device reports, rtcGetDeviceProperty, and the shared object the symbols
+ * came from, dladdr), so every figure can name its yardstick. Writes at most
+ * n bytes (NUL-terminated); SC_ERR_UNSUPPORTED if no device can be made. */
+SC_API sc_status sc_embree_version(char *buf, size_t n);
 
 typedef struct sc_embree sc_embree;
 

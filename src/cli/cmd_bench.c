@@ -19,9 +19,15 @@
 #include "x86/cpu_features.h"
 #ifdef SC_HAVE_EMBREE
 #include <embree3/rtcore_config.h>
+
+#include "spherecull/sc_embree.h"
 #endif
 
 #define CMD "bench"
+
+/* The Embree this process loaded ("3.13.5 /path", sc_embree_version): the
+ * yardstick, printed and written in every CSV row. */
+static char embree_build[128];
 
 static const sc_name ray_kinds[] = { { "primary", SC_BENCH_PRIMARY }, { "shadow", SC_BENCH_SHADOW } };
 static const sc_name embree_modes[] = { { "default", 0 }, { "robust", 1 } };
@@ -192,12 +198,14 @@ static void print_row(void *ctx, const sc_bench_row *r)
     sc_csv_str(p->csv, p->spec);
     fprintf(p->csv,
             ",%zu,%s,%zu,%d,%d,%s,%s,%.3f,%.3f,%.3f,%.2f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.4f,%.4f,%.5f,"
-            "%.4f,%.4f,%zu,%zu,%.2f,%zu,%zu\n",
+            "%.4f,%.4f,%zu,%zu,%.2f,%zu,%zu,",
             p->scene.triangles, kind, r->rays, r->threads, r->leaf, mode, sc_isa_name(r->isa),
             r->bytes_per_tri, p->scene.embree_bvh_bpt, p->scene.embree_bpt, r->sphere_leaf_pct, r->mrays, r->embree_mrays, r->ratio, r->cycle_ratio, (double)w->nodes / n,
             (double)w->leaves / n, (double)w->sphere_tests / n, (double)w->sphere_rejects / n,
             (double)w->tri_tests / n, (double)w->tri_hits / n, rej, r->leaf_count, r->leaves_with_spheres,
             r->build_ms, r->diff_embree, r->diff_brute);
+    sc_csv_str(p->csv, embree_build);
+    fputc('\n', p->csv);
 }
 
 static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_fd, FILE *csv)
@@ -242,10 +250,10 @@ static void print_machine(const sc_bench_options *o, int cycles_fd)
 #ifdef SC_HAVE_EMBREE
     if (o->packet)
         printf("# embree: %s, %s scene, rtcIntersect%d / rtcOccluded%d on the same rays; ours: sc_trace_closest%d / "
-               "sc_trace_any%d\n", RTC_VERSION_STRING, o->embree_robust ? "robust" : "default", o->packet, o->packet,
+               "sc_trace_any%d\n", embree_build, o->embree_robust ? "robust" : "default", o->packet, o->packet,
                o->packet, o->packet);
     else
-        printf("# embree: %s, %s scene, rtcIntersect1 / rtcOccluded1 on the same rays\n", RTC_VERSION_STRING,
+        printf("# embree: %s, %s scene, rtcIntersect1 / rtcOccluded1 on the same rays\n", embree_build,
                o->embree_robust ? "robust" : "default");
 #else
     printf("# embree: not built in; ratios are n/a\n");
@@ -270,6 +278,10 @@ static int run(int argc, char **argv)
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0)
         return 1;
     int cycles_fd = sc_bench_cycles_open();
+#ifdef SC_HAVE_EMBREE
+    if (sc_embree_version(embree_build, sizeof embree_build) != SC_OK)
+        snprintf(embree_build, sizeof embree_build, "%s (headers; no device)", RTC_VERSION_STRING);
+#endif
     print_machine(&a.o, cycles_fd);
     char *text = NULL;
     size_t len = 0;
@@ -281,7 +293,7 @@ static int run(int argc, char **argv)
         fprintf(csv, "scene,triangles,rays,count,threads,leaf,prefilter,isa,bytes_per_tri,embree_bvh_bytes_per_tri,"
                      "embree_total_bytes_per_tri,sphere_leaf_pct,mrays,embree_mrays,ratio,cycle_ratio,nodes,leaves,"
                      "sphere_tests,sphere_rejects,tri_tests,tri_hits,reject_rate,leaf_count,leaves_with_spheres,"
-                     "build_ms,diff_embree,diff_brute\n");
+                     "build_ms,diff_embree,diff_brute,embree_build\n");
         for (int s = 0; s < a.nscenes && rc == 0; s++)
             rc = bench_scene(a.scenes[s], &a.o, cycles_fd, csv);
         if (fclose(csv) != 0 && rc == 0) {

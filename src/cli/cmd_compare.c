@@ -11,16 +11,23 @@
 #include "compare/compare.h"
 #include "compare/tracer.h"
 #include "spherecull/sc_scene.h"
+#ifdef SC_HAVE_EMBREE
+#include "spherecull/sc_embree.h"
+#endif
 
 #define CMD "compare"
 
-enum { O_RAYS, O_TRACERS, O_THREADS, O_ORACLE, O_REPEATS, O_WIDTH, O_COUNT, O_SEED, O_CSV, O_JSON, O_PLOT };
+enum { O_RAYS, O_TRACERS, O_THREADS, O_ORACLE, O_REPEATS, O_MIN_TIME, O_MXCSR, O_WIDTH, O_COUNT, O_SEED, O_CSV,
+       O_JSON, O_PLOT };
 static const sc_cli_opt opts[] = {
     [O_RAYS] = { "rays", 0, "LIST", "comma list of primary,shadow,diffuse,random,adversarial", "all" },
     [O_TRACERS] = { "tracers", 0, "LIST", "comma list of tracer names (below)", "all of this build" },
     [O_THREADS] = { "threads", 0, "LIST", "thread counts to time, e.g. 1,2", "1,2" },
     [O_ORACLE] = { "oracle-rays", 0, "N", "rays per set checked by the oracle (0 = none)", "10000" },
     [O_REPEATS] = { "repeats", 0, "N", "timed runs per row, the median is reported", "5" },
+    [O_MIN_TIME] = { "min-time", 0, "SECONDS", "each timed run repeats its ray set until this long", "0.2" },
+    [O_MXCSR] = { "mxcsr", 0, "MODE", "ftz (flush-to-zero + denormals-are-zero, as Embree asks) or default, "
+                                      "in every timed thread of every tracer", "ftz" },
     [O_WIDTH] = { "width", 0, "W", "primary image width; height keeps the camera's aspect", "512" },
     [O_COUNT] = { "count", 0, "N", "random and adversarial rays per set", "65536" },
     [O_SEED] = { "seed", 0, "S", "ray seed", "1" },
@@ -118,6 +125,24 @@ static int on_option(void *ctx, int opt, const char *val)
             return 2;
         a->opt.repeats = (int)v;
         return 0;
+    case O_MIN_TIME: {
+        char *end;
+        errno = 0;
+        double d = strtod(val, &end);
+        if (errno || end == val || *end || !(d >= 0) || d > 60) {
+            sc_cli_error(CMD, "--min-time: '%s' is not a number of seconds in [0, 60]", val);
+            return 2;
+        }
+        a->opt.min_seconds = d;
+        return 0;
+    }
+    case O_MXCSR:
+        if (strcmp(val, "ftz") != 0 && strcmp(val, "default") != 0) {
+            sc_cli_error(CMD, "--mxcsr: '%s' is not ftz or default", val);
+            return 2;
+        }
+        a->opt.ftz = strcmp(val, "ftz") == 0;
+        return 0;
     case O_WIDTH:
         if (sc_cli_int(CMD, opts[opt].name, val, 1, 8192, &v) != 0)
             return 2;
@@ -184,6 +209,16 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0 || sc_cli_check_output(CMD, "--json", a.json) != 0)
         return 1;
+    /* The yardstick, named in the output and in every row. */
+    char embree_build[128] = "";
+#ifdef SC_HAVE_EMBREE
+    if (sc_embree_version(embree_build, sizeof embree_build) == SC_OK)
+        printf("embree: %s\n", embree_build);
+#endif
+    a.opt.embree_build = embree_build;
+    printf("timing: MXCSR %s in every timed thread, each timed run >= %.2f s\n",
+           a.opt.ftz ? "flush-to-zero + denormals-are-zero" : "default", a.opt.min_seconds);
+    fflush(stdout);
     sc_cmp_rows rows = { 0 };
     for (int s = 0; s < a.nscenes && rc == 0; s++)
         rc = compare_scene(a.scenes[s], &a.opt, &rows);
@@ -194,7 +229,8 @@ static int run(int argc, char **argv)
                "does not stop, grazes = rays whose first exact hit only touches the surface (tangent) and that the tracer\n"
                "does not report (adversarial rows), xEmbree = speed / "
                "embree (rtcIntersect1/rtcOccluded1) at the same threads, packet rows (-p8, -p16) / embree-p8, "
-               "embree-p16, stream rows / embree-stream;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
+               "embree-p16, stream rows / embree-stream; xBest = speed / the faster of embree and embree-high (single rays;\n"
+               "packets and streams: as xEmbree), named in the CSV's best_embree_tracer;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
                "counted by the prefilter tracers\n(packet rows count ray-triangle and ray-sphere pairs, as single rays do).\n");
     }
     if (rc == 0 && a.csv && sc_cli_write(CMD, a.csv, write_csv_cb, &rows) != 0)

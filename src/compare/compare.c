@@ -29,6 +29,8 @@ void sc_cmp_options_default(sc_cmp_options *o)
     o->nthreads = 2;
     o->oracle_rays = 10000;
     o->repeats = 5;
+    o->min_seconds = 0.2;
+    o->ftz = 1;
     o->width = 512, o->height = 0;
     o->random_rays = 65536;
     o->adversarial_rays = 65536;
@@ -255,10 +257,28 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
     for (int th = 0; th < opt->nthreads; th++) {
         double times[64];
         int reps = opt->repeats < 64 ? opt->repeats : 64;
+        /* A repeat runs the set `loops` times, enough for min_seconds, so a
+         * small set is not timed over a few milliseconds of a noisy VM; the
+         * first run (untimed for the result) measures how many that is. */
+        double first;
+        sc_status st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &first);
+        if (st != SC_OK)
+            return st;
+        int loops = 1;
+        if (opt->min_seconds > 0 && first < opt->min_seconds)
+            loops = first > 0 ? (int)ceil(opt->min_seconds / first) : 1000;
+        if (loops > 1000)
+            loops = 1000;
         for (int i = 0; i < reps; i++) {
-            sc_status st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &times[i]);
-            if (st != SC_OK)
-                return st;
+            double sum = 0;
+            for (int l = 0; l < loops; l++) {
+                double s;
+                st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &s);
+                if (st != SC_OK)
+                    return st;
+                sum += s;
+            }
+            times[i] = sum / loops;
         }
         qsort(times, (size_t)reps, sizeof times[0], cmp_double);
         sc_cmp_row *row = row_add(out);
@@ -273,6 +293,11 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
         row->threads = opt->threads[th];
         row->mrays_per_s = (double)set->count / times[reps / 2] / 1e6;
         row->speed_vs_embree = NAN;
+        row->best_embree = NAN;
+        row->best_embree_tracer[0] = 0;
+        snprintf(row->embree_build, sizeof row->embree_build, "%s", opt->embree_build ? opt->embree_build : "");
+        row->ftz = opt->ftz;
+        row->loops = loops;
         row->oracle_rays = acc->oracle_rays;
         row->hit_miss_disagree = acc->hit_miss;
         row->primid_disagree = acc->primid;
@@ -328,6 +353,7 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
         memset(&ctr, 0, sizeof ctr);
         /* Embree's stream gets its coherence flag from the ray set */
         r->tr[ti].incoherent = k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM;
+        r->tr[ti].ftz = opt->ftz;
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
         if (st != SC_OK) {
             if (r->err)
@@ -360,6 +386,35 @@ static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
     }
 }
 
+/* Against the best Embree of the same kind, same set and threads: for
+ * single rays the faster of its medium and high builds ("embree",
+ * "embree-high"), for packets and streams the one Embree tracer of that
+ * width (there is one build quality of each). */
+static void best_embree(sc_cmp_rows *out, size_t first_row)
+{
+    for (size_t i = first_row; i < out->count; i++) {
+        sc_cmp_row *row = &out->rows[i];
+        const sc_tracer_def *d = sc_tracer_find(row->tracer);
+        const int w = d ? d->packet : 0;
+        const char *refs[2] = { w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
+                                                                                                        : "embree",
+                                w == 0 ? "embree-high" : NULL };
+        const sc_cmp_row *best = NULL;
+        for (size_t j = first_row; j < out->count; j++) {
+            const sc_cmp_row *o = &out->rows[j];
+            if (o->rays != row->rays || o->threads != row->threads)
+                continue;
+            for (int k = 0; k < 2; k++)
+                if (refs[k] && strcmp(o->tracer, refs[k]) == 0 && (!best || o->mrays_per_s > best->mrays_per_s))
+                    best = o;
+        }
+        if (best) {
+            row->best_embree = row->mrays_per_s / best->mrays_per_s;
+            snprintf(row->best_embree_tracer, sizeof row->best_embree_tracer, "%s", best->tracer);
+        }
+    }
+}
+
 sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
                        const sc_light *lights, size_t nlights, const sc_cmp_options *opt, sc_cmp_rows *out,
                        FILE *log, char *err, size_t errlen)
@@ -367,7 +422,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
     if (err && errlen)
         err[0] = 0;
     if (!scene_name || !camera || (nlights && !lights) || !opt || !out || opt->nthreads < 1 ||
-        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1)
+        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1 || !(opt->min_seconds >= 0) ||
+        opt->min_seconds > 60)
         return SC_ERR_INVALID_ARGUMENT;
     for (int k = 0; k < opt->nthreads; k++)
         if (opt->threads[k] < 1 || opt->threads[k] > SC_CMP_MAX_THREADS)
@@ -388,8 +444,10 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         for (int k = 0; k < SC_RAYS_KIND_COUNT && st == SC_OK; k++)
             if ((opt->ray_kinds & (1u << k)) && r.sets[k].count)
                 st = run_set(&r, k, out);
-    if (st == SC_OK)
+    if (st == SC_OK) {
         speed_vs_embree(out, first_row);
+        best_embree(out, first_row);
+    }
     run_free(&r);
     return st;
 }
@@ -409,10 +467,11 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
     fprintf(f, "scene,triangles,rays,tracer,threads,mrays_per_s,oracle_rays,hit_miss_disagree,"
                "primid_disagree,t_err_max,holes,sphere_tests_per_ray,sphere_reject_rate,"
                "false_positive_rate,tri_tests_per_ray,bytes_per_tri,"
-               "nrays,closed,t_err_median,hole_rays,speed_vs_embree,grazes_missed,graze_rays\n");
+               "nrays,closed,t_err_median,hole_rays,speed_vs_embree,grazes_missed,graze_rays,"
+               "best_embree,best_embree_tracer,embree_build,mxcsr,loops\n");
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
-        char a[32], b[32], c[32], d[32], e[32], g[32], h[32];
+        char a[32], b[32], c[32], d[32], e[32], g[32], h[32], be[32];
         /* empty CSV cells for "not applicable" */
         snprintf(a, sizeof a, isnan(r->t_err_max) ? "" : "%.3e", r->t_err_max);
         snprintf(b, sizeof b, isnan(r->sphere_tests_per_ray) ? "" : "%.3f", r->sphere_tests_per_ray);
@@ -421,13 +480,19 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
         snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
         snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
+        snprintf(be, sizeof be, isnan(r->best_embree) ? "" : "%.3f", r->best_embree);
         sc_csv_str(f, r->scene);
         fprintf(f, ",%u,%s,", r->triangles, sc_rayset_kind_name(r->rays));
         sc_csv_str(f, r->tracer);
-        fprintf(f, ",%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu\n",
+        fprintf(f, ",%d,%.3f,%zu,%zu,%zu,%s,%zu,%s,%s,%s,%s,%.1f,%zu,%d,%s,%zu,%s,%zu,%zu,",
                 r->threads, r->mrays_per_s,
                 r->oracle_rays, r->hit_miss_disagree, r->primid_disagree, a, r->holes, b, c, d, e,
                 r->bytes_per_tri, r->nrays, r->closed, g, r->hole_rays, h, r->grazes_missed, r->graze_rays);
+        fprintf(f, "%s,", be);
+        sc_csv_str(f, r->best_embree_tracer);
+        fputc(',', f);
+        sc_csv_str(f, r->embree_build);
+        fprintf(f, ",%s,%d\n", r->ftz ? "ftz" : "default", r->loops);
     }
     return ferror(f) ? -1 : 0;
 }
@@ -461,6 +526,11 @@ int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f)
         cJSON_AddNumberToObject(o, "threads", r->threads);
         cJSON_AddNumberToObject(o, "mrays_per_s", r->mrays_per_s);
         json_num(o, "speed_vs_embree", r->speed_vs_embree);
+        json_num(o, "best_embree", r->best_embree);
+        cJSON_AddStringToObject(o, "best_embree_tracer", r->best_embree_tracer);
+        cJSON_AddStringToObject(o, "embree_build", r->embree_build);
+        cJSON_AddStringToObject(o, "mxcsr", r->ftz ? "ftz" : "default");
+        cJSON_AddNumberToObject(o, "loops", r->loops);
         cJSON_AddNumberToObject(o, "oracle_rays", (double)r->oracle_rays);
         cJSON_AddNumberToObject(o, "hit_miss_disagree", (double)r->hit_miss_disagree);
         cJSON_AddNumberToObject(o, "primid_disagree", (double)r->primid_disagree);
@@ -494,13 +564,14 @@ void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f)
         const sc_cmp_row *r = &rows->rows[i];
         if (strcmp(r->scene, last_scene) != 0) {
             fprintf(f, "\n%s: %u triangles, %s\n", r->scene, r->triangles, r->closed ? "closed" : "open");
-            fprintf(f, "%-11s %-24s %3s %8s %7s %6s %5s %5s %9s %9s %5s %6s %7s %6s %6s %7s %6s\n", "rays",
-                    "tracer", "thr", "Mrays/s", "xEmbree", "oracle", "h/m", "prim", "t_err_med", "t_err_max",
+            fprintf(f, "%-11s %-24s %3s %8s %7s %6s %6s %5s %5s %9s %9s %5s %6s %7s %6s %6s %7s %6s\n", "rays",
+                    "tracer", "thr", "Mrays/s", "xEmbree", "xBest", "oracle", "h/m", "prim", "t_err_med", "t_err_max",
                     "holes", "grazes", "sph/ray", "rej%", "fp%", "tri/ray", "B/tri");
             last_scene = r->scene;
         }
-        char x[16], tm[16], tx[16], sp[16], rj[16], fp[16], tt[16], ho[24], gz[24];
+        char x[16], xb[16], tm[16], tx[16], sp[16], rj[16], fp[16], tt[16], ho[24], gz[24];
         fmt_num(x, sizeof x, "%.2f", r->speed_vs_embree);
+        fmt_num(xb, sizeof xb, "%.2f", r->best_embree);
         fmt_num(tm, sizeof tm, "%.1e", r->t_err_median);
         fmt_num(tx, sizeof tx, "%.1e", r->t_err_max);
         fmt_num(sp, sizeof sp, "%.2f", r->sphere_tests_per_ray);
@@ -514,8 +585,8 @@ void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f)
             snprintf(ho, sizeof ho, "-");
             snprintf(gz, sizeof gz, "-");
         }
-        fprintf(f, "%-11s %-24s %3d %8.2f %7s %6zu %5zu %5zu %9s %9s %5s %6s %7s %6s %6s %7s %6.0f\n",
-                sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s, x, r->oracle_rays,
+        fprintf(f, "%-11s %-24s %3d %8.2f %7s %6s %6zu %5zu %5zu %9s %9s %5s %6s %7s %6s %6s %7s %6.0f\n",
+                sc_rayset_kind_name(r->rays), r->tracer, r->threads, r->mrays_per_s, x, xb, r->oracle_rays,
                 r->hit_miss_disagree, r->primid_disagree, tm, tx, ho, gz, sp, rj, fp, tt, r->bytes_per_tri);
     }
 }

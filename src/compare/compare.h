@@ -27,6 +27,9 @@ typedef struct sc_cmp_options {
     size_t random_rays, adversarial_rays;
     uint64_t seed;
     int oracle_threads;
+    double min_seconds;                 /* each timed repeat runs its set until this long (>= 0) */
+    int ftz;                            /* 1: FTZ|DAZ in every timed thread, ours and Embree's */
+    const char *embree_build;           /* the Embree in use ("3.13.5 /path"), copied to rows; may be NULL */
 } sc_cmp_options;
 
 void sc_cmp_options_default(sc_cmp_options *o);
@@ -41,6 +44,12 @@ typedef struct sc_cmp_row {
     int threads;
     double mrays_per_s;
     double speed_vs_embree;             /* mrays / embree's at the same threads; NaN if none */
+    double best_embree;                 /* mrays / the faster Embree of its kind (single rays:
+                                           embree or embree-high); NaN if none */
+    char best_embree_tracer[40];        /* which one that was ("" if none) */
+    char embree_build[128];             /* the Embree the run used ("" without Embree) */
+    int ftz;                            /* the MXCSR mode it was timed in */
+    int loops;                          /* runs of the set per timed repeat (min_seconds) */
     size_t oracle_rays;
     size_t hit_miss_disagree, primid_disagree;
     size_t holes, hole_rays;            /* vertex/edge rays that cross the surface: missed / all */

@@ -33,6 +33,7 @@ static const sc_tracer_def all_tracers[] = {
     { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
     { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0 },
     { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0 },
+    { "embree-compact", SC_TRACER_EMBREE, SC_EMBREE_COMPACT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
     { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8 },
     { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16 },
     { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM },
@@ -341,6 +342,11 @@ typedef struct pool_job {
 static void *pool_worker(void *arg)
 {
     pool_job *j = arg;
+#if defined(__SSE__)
+    const unsigned csr = _mm_getcsr();
+    if (j->t->ftz)
+        _mm_setcsr(csr | 0x8040);            /* FTZ (bit 15) | DAZ (bit 6) */
+#endif
     for (;;) {
         size_t b = atomic_fetch_add(&j->next, CHUNK);
         if (b >= j->n)
@@ -350,6 +356,9 @@ static void *pool_worker(void *arg)
                           NULL) != SC_OK)
             atomic_store(&j->failed, 1);
     }
+#if defined(__SSE__)
+    _mm_setcsr(csr);
+#endif
     return NULL;
 }
 

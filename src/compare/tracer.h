@@ -45,6 +45,9 @@ typedef struct sc_tracer {
     int fp_exact;            /* false positives are counted exactly */
     int incoherent;          /* Embree's stream flag for the next runs: the rays are
                               * incoherent (diffuse, random); set by the caller */
+    int ftz;                 /* sc_tracer_run_threads sets MXCSR flush-to-zero and
+                              * denormals-are-zero in every thread it runs this tracer
+                              * on (and restores it): Embree asks for it; set by the caller */
 } sc_tracer;
 
 /* The named tracers of this build, in table order (NULL-terminated). */

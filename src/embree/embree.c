@@ -1,6 +1,8 @@
 /* Embree 3 back end: native triangles and the user-geometry prefilter
  * drop-in (see sc_embree.h). */
-#define _POSIX_C_SOURCE 200809L
+/* dladdr (which shared object the Embree symbols came from) is a GNU extension. */
+#define _GNU_SOURCE
+#include <dlfcn.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -51,6 +53,27 @@ void sc_embree_config_default(sc_embree_config *cfg)
     cfg->cluster_size = 8;
     cfg->sphere = SC_SPHERE_MINIMAL;
     cfg->build_threads = 0;
+}
+
+sc_status sc_embree_version(char *buf, size_t n)
+{
+    if (!buf || n == 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    buf[0] = 0;
+    RTCDevice d = rtcNewDevice("verbose=0");
+    if (!d)
+        return SC_ERR_UNSUPPORTED;
+    long major = (long)rtcGetDeviceProperty(d, RTC_DEVICE_PROPERTY_VERSION_MAJOR);
+    long minor = (long)rtcGetDeviceProperty(d, RTC_DEVICE_PROPERTY_VERSION_MINOR);
+    long patch = (long)rtcGetDeviceProperty(d, RTC_DEVICE_PROPERTY_VERSION_PATCH);
+    rtcReleaseDevice(d);
+    Dl_info info;
+    const char *path = "?";
+    /* An object pointer to a function: the one cast POSIX dladdr needs. */
+    if (dladdr((void *)(uintptr_t)&rtcNewDevice, &info) && info.dli_fname)
+        path = info.dli_fname;
+    snprintf(buf, n, "%ld.%ld.%ld %s", major, minor, patch, path);
+    return SC_OK;
 }
 
 static bool memory_monitor(void *ptr, ssize_t bytes, bool post)
@@ -396,10 +419,12 @@ sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_confi
     /* The drop-in needs Embree's conservative box tests too: a ray through
      * a vertex on a cluster box's face is otherwise culled before our
      * watertight test runs (measured: vertex rays through closed meshes). */
-    rtcSetSceneFlags(e->scene, cfg->mode == SC_EMBREE_DEFAULT ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneFlags(e->scene, cfg->mode == SC_EMBREE_DEFAULT   ? RTC_SCENE_FLAG_NONE
+                               : cfg->mode == SC_EMBREE_COMPACT ? RTC_SCENE_FLAG_COMPACT
+                                                                : RTC_SCENE_FLAG_ROBUST);
 
     RTCGeometry g;
-    if (cfg->mode == SC_EMBREE_DEFAULT || cfg->mode == SC_EMBREE_ROBUST) {
+    if (cfg->mode == SC_EMBREE_DEFAULT || cfg->mode == SC_EMBREE_ROBUST || cfg->mode == SC_EMBREE_COMPACT) {
         g = rtcNewGeometry(e->device, RTC_GEOMETRY_TYPE_TRIANGLE);
         /* Embree's own copies, so the monitor counts what a user of Embree pays. */
         float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
