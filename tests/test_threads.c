@@ -26,6 +26,7 @@
 #include "spherecull/sc_prefilter.h"
 #include "spherecull/sc_simd.h"
 #include "spherecull/sc_trace.h"
+#include "bvh/bvh_internal.h"
 
 enum { NTRI = 3000, NRAY = 1500, TRACERS = 4, BUILDERS = 2, BUILDS = 6 };
 
@@ -273,11 +274,61 @@ static void test_shared_bvh(void **state)
     assert_true(ran >= 1);
 }
 
+/* A build on several threads (its own C11 threads for large subtrees) is
+ * bit for bit the single-threaded one: nodes, leaves, figures. Under
+ * ThreadSanitizer this is also the race check of the parallel builder. */
+static void test_parallel_build(void **state)
+{
+    (void)state;
+    enum { BIG = 200000 };
+    sc_rng g;
+    sc_rng_seed(&g, 77);
+    float *pos = malloc(sizeof(float) * 9 * BIG);
+    assert_non_null(pos);
+    for (int t = 0; t < BIG; t++) {
+        double c[3];
+        for (int a = 0; a < 3; a++)
+            c[a] = sc_rng_range(&g, -1, 1);
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++)
+                pos[9 * t + 3 * k + a] = (float)(c[a] + sc_rng_range(&g, -0.01, 0.01));
+    }
+    uint32_t *idx = malloc(sizeof(uint32_t) * 3 * BIG);
+    assert_non_null(idx);
+    for (uint32_t i = 0; i < 3 * BIG; i++)
+        idx[i] = i;
+    const sc_mesh_view m = { pos, 3 * BIG, idx, BIG, 0, 0 };
+    sc_bvh *ref = NULL;
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    assert_int_equal(cfg.threads, 1);
+    assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
+    const int counts[] = { 2, 3, 0 };
+    for (int c = 0; c < 3; c++) {
+        cfg.threads = counts[c];
+        sc_bvh *b = NULL;
+        assert_int_equal(sc_bvh_build(&m, &cfg, &b), SC_OK);
+        assert_int_equal(b->node_count, ref->node_count);
+        assert_int_equal(b->leaf_bytes, ref->leaf_bytes);
+        assert_true(b->sah_cost == ref->sah_cost);
+        assert_memory_equal(b->nodes, ref->nodes, ref->node_count * sizeof *ref->nodes);
+        assert_memory_equal(b->leaves, ref->leaves, ref->leaf_bytes);
+        sc_bvh_free(b);
+    }
+    cfg.threads = -1;
+    sc_bvh *bad = NULL;
+    assert_int_equal(sc_bvh_build(&m, &cfg, &bad), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_free(ref);
+    free(pos);
+    free(idx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_first_use),     /* first: nothing has touched the library yet */
         cmocka_unit_test(test_shared_bvh),
+        cmocka_unit_test(test_parallel_build),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

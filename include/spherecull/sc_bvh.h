@@ -50,6 +50,7 @@ extern "C" {
 #endif
 
 #define SC_BVH_MAX_LEAF 16
+#define SC_BVH_MAX_THREADS 256
 #define SC_BVH_AUTO_SAMPLES 32
 #define SC_BVH_AUTO_THRESHOLD16 0.75   /* the upper end of the measured C_sph / C_tri for blocks of 16 */
 
@@ -76,6 +77,9 @@ typedef struct sc_bvh_config {
     sc_tri_test tri_test;
     int sah_bins;                /* 4..64 */
     float traversal_cost;        /* SAH cost of a node visit, relative to one leaf block test */
+    int threads;                 /* build threads: 1 = the calling thread only (default),
+                                    0 = one per online CPU, n = at most n; the tree is the
+                                    same for every value */
 } sc_bvh_config;
 
 typedef struct sc_bvh_info {
@@ -101,8 +105,10 @@ SC_API void sc_bvh_config_default(sc_bvh_config *cfg);
 
 /* Threads: sc_bvh_build, sc_bvh_free and sc_bvh_get_info are reentrant. Any
  * number of threads may build and free distinct BVHs at once, while others
- * trace theirs (sc_trace.h); the build runs in the calling thread (no
- * OpenMP or thread pool inside). The input arrays are only read. A BVH may
+ * trace theirs (sc_trace.h). With cfg->threads != 1 the build starts up to
+ * that many - 1 POSIX threads of its own for large subtrees and joins them
+ * before it returns (no pool survives the call); the tree is bit for bit
+ * the one a single thread builds. The input arrays are only read. A BVH may
  * be freed only when no thread traces it any more.
  *
  * mesh: a view of the caller's vertex and index arrays (sc_mesh.h; strides

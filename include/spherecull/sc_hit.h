@@ -10,7 +10,9 @@
  * SC_HITREC_MISS, geom == inst == SC_INVALID_ID, ng == 0, t == the ray's
  * tmax and u == v == 0. 36 bytes.
  * sc_hit_packet8/16 hold the same per lane, SoA, aligned like the ray
- * packets (32 and 64 bytes).
+ * packets (32 and 64 bytes). On the heap: aligned_alloc(32, sizeof
+ * (sc_hit_packet8)) (288 bytes, not a multiple of 64) and aligned_alloc(64,
+ * sizeof (sc_hit_packet16)) (576 bytes).
  *
  * Threads: plain data; nothing here is shared by the library.
  */

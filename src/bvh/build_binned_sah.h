@@ -21,10 +21,16 @@ typedef struct sc_sah_params {
     int max_leaf;            /* most primitives per leaf */
     int bins;                /* 4..SC_SAH_MAX_BINS */
     float traversal_cost;    /* of a node visit, in leaf-block tests */
+    int threads;             /* most threads building at once (>= 1; the caller's included) */
 } sc_sah_params;
 
+/* Ranges smaller than this are not worth a thread. */
+#define SC_SAH_PARALLEL_MIN 65536
+
 /* ids[0..n) (n >= 1) are permuted so that every leaf is a contiguous range;
- * nodes needs room for 2n - 1. Deterministic. Returns the root's index. */
+ * nodes needs room for 2n - 1 (*node_count; some slots stay unused). The
+ * same tree, node indices included, for any p->threads. Returns the root's
+ * index (0). */
 uint32_t sc_build_binned_sah(const box3 *boxes, const float (*centres)[3], uint32_t *ids, size_t n,
                              const sc_sah_params *p, sc_bnode *nodes, size_t *node_count);
 

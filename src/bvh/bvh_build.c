@@ -3,9 +3,11 @@
  * the 8-wide layout (collapse_bvh8.c) whose leaves leaf_triangles.c
  * encodes; then the handle's lifecycle, its figures and the names of the
  * config's enums. */
+#define _POSIX_C_SOURCE 200809L   /* sysconf */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "build_internal.h"
 #include "common/sc_clock.h"
@@ -23,6 +25,7 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
     cfg->tri_test = SC_TRI_WATERTIGHT;
     cfg->sah_bins = 32;
     cfg->traversal_cost = 2.0f;
+    cfg->threads = 1;
 }
 
 static void *alloc_aligned(size_t bytes)
@@ -48,7 +51,8 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
         return SC_ERR_INVALID_ARGUMENT;
     if (cfg.leaf_size < 1 || cfg.leaf_size > SC_BVH_MAX_LEAF || (unsigned)cfg.prefilter >= SC_PREFILTER_MODE_COUNT ||
         (unsigned)cfg.tri_test >= SC_TRI_TEST_COUNT ||
-        cfg.sah_bins < 4 || cfg.sah_bins > SC_SAH_MAX_BINS || !(cfg.traversal_cost >= 0) || !isfinite(cfg.traversal_cost))
+        cfg.sah_bins < 4 || cfg.sah_bins > SC_SAH_MAX_BINS || !(cfg.traversal_cost >= 0) || !isfinite(cfg.traversal_cost) ||
+        cfg.threads < 0 || cfg.threads > SC_BVH_MAX_THREADS)
         return SC_ERR_INVALID_ARGUMENT;
     if (triangle_count > (size_t)INT32_MAX)
         return SC_ERR_LIMIT;
@@ -102,7 +106,12 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
 
     size_t root_nodes = 0;
     if (used) {
-        const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost };
+        int threads = cfg.threads;
+        if (threads == 0) {
+            long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+            threads = cpus < 1 ? 1 : cpus > SC_BVH_MAX_THREADS ? SC_BVH_MAX_THREADS : (int)cpus;
+        }
+        const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost, threads };
         size_t bn_count;
         uint32_t root = sc_build_binned_sah(pbox, (const float (*)[3])cen, ids, used, &sah, bn, &bn_count);
         B.root_area = box_area(&B.bn[root].box);

@@ -181,6 +181,7 @@ static int run(int argc, char **argv)
     cfg.leaf_size = (int)leaf;
     cfg.prefilter = prefilter;
     cfg.tri_test = tri;
+    cfg.threads = (int)threads;          /* 0 (the default): every CPU, as the render */
     sc_bvh *bvh = NULL;
     st = sc_bvh_build(&view.mesh, &cfg, &bvh);
     if (st != SC_OK) {

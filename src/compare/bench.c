@@ -236,6 +236,7 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
     cfg.leaf_size = leaf;
     cfg.prefilter = (sc_prefilter_mode)mode;
     cfg.tri_test = o->tri;
+    cfg.threads = 0;          /* every CPU, as Embree's build */
     if (o->trav_cost >= 0)
         cfg.traversal_cost = o->trav_cost;
     sc_tracer t;

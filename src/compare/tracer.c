@@ -97,6 +97,7 @@ sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_check
         sc_bvh_config_default(&cfg);
         cfg.prefilter = (sc_prefilter_mode)def->mode;
         cfg.tri_test = (sc_tri_test)def->quality;
+        cfg.threads = 0;      /* every CPU, as Embree's build (build_threads 0) */
         sc_status st = sc_tracer_build_bvh(t, def->name, &cfg, cm);
         t->def.packet = def->packet;
         /* packets test spheres only for one-origin packets (the cone): the
