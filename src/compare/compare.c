@@ -480,7 +480,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
         snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
         snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
-        snprintf(be, sizeof be, isnan(r->best_embree) ? "" : "%.3f", r->best_embree);
+        snprintf(be, sizeof be, isnan(r->best_embree) ? "" : "%.4g", r->best_embree);
         sc_csv_str(f, r->scene);
         fprintf(f, ",%u,%s,", r->triangles, sc_rayset_kind_name(r->rays));
         sc_csv_str(f, r->tracer);
