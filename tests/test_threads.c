@@ -35,21 +35,22 @@ typedef struct soup {
     uint32_t *idx;
 } soup;
 
-static void make_soup(uint64_t seed, soup *s)
+/* n triangles with centres in [-1, 1]^3 and vertices within +-size of them. */
+static void make_soup(uint64_t seed, int n, double size, soup *s)
 {
     sc_rng g;
     sc_rng_seed(&g, seed);
-    s->pos = malloc(sizeof(float) * 9 * NTRI);
-    s->idx = malloc(sizeof(uint32_t) * 3 * NTRI);
+    s->pos = malloc(sizeof(float) * 9 * (size_t)n);
+    s->idx = malloc(sizeof(uint32_t) * 3 * (size_t)n);
     assert_non_null(s->pos);
     assert_non_null(s->idx);
-    for (int t = 0; t < NTRI; t++) {
+    for (int t = 0; t < n; t++) {
         double c[3];
         for (int a = 0; a < 3; a++)
             c[a] = sc_rng_range(&g, -1, 1);
         for (int k = 0; k < 3; k++)
             for (int a = 0; a < 3; a++)
-                s->pos[9 * t + 3 * k + a] = (float)(c[a] + sc_rng_range(&g, -0.08, 0.08));
+                s->pos[9 * t + 3 * k + a] = (float)(c[a] + sc_rng_range(&g, -size, size));
         for (int k = 0; k < 3; k++)
             s->idx[3 * t + k] = (uint32_t)(3 * t + k);
     }
@@ -167,7 +168,7 @@ static void *builder(void *arg)
     pthread_barrier_wait(sh->go);
     for (int b = 0; b < BUILDS; b++) {
         soup s;
-        make_soup(1000 + 100 * (uint64_t)w->id + (uint64_t)b, &s);
+        make_soup(1000 + 100 * (uint64_t)w->id + (uint64_t)b, NTRI, 0.08, &s);
         sc_bvh *own = NULL;
         sc_bvh_config cfg = sh->cfg;
         cfg.prefilter = b % 2 ? SC_PREFILTER_MINIMAL : SC_PREFILTER_AUTO;
@@ -205,7 +206,7 @@ static void *switcher(void *arg)
 static void run_isa(sc_isa isa, int switch_isa)
 {
     soup s;
-    make_soup(7, &s);
+    make_soup(7, NTRI, 0.08, &s);
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     assert_int_equal(sc_isa_force(isa), SC_OK);
@@ -281,23 +282,9 @@ static void test_parallel_build(void **state)
 {
     (void)state;
     enum { BIG = 200000 };
-    sc_rng g;
-    sc_rng_seed(&g, 77);
-    float *pos = malloc(sizeof(float) * 9 * BIG);
-    assert_non_null(pos);
-    for (int t = 0; t < BIG; t++) {
-        double c[3];
-        for (int a = 0; a < 3; a++)
-            c[a] = sc_rng_range(&g, -1, 1);
-        for (int k = 0; k < 3; k++)
-            for (int a = 0; a < 3; a++)
-                pos[9 * t + 3 * k + a] = (float)(c[a] + sc_rng_range(&g, -0.01, 0.01));
-    }
-    uint32_t *idx = malloc(sizeof(uint32_t) * 3 * BIG);
-    assert_non_null(idx);
-    for (uint32_t i = 0; i < 3 * BIG; i++)
-        idx[i] = i;
-    const sc_mesh_view m = { pos, 3 * BIG, idx, BIG, 0, 0 };
+    soup big;
+    make_soup(77, BIG, 0.01, &big);
+    const sc_mesh_view m = { big.pos, 3 * BIG, big.idx, BIG, 0, 0 };
     sc_bvh *ref = NULL;
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
@@ -319,8 +306,7 @@ static void test_parallel_build(void **state)
     sc_bvh *bad = NULL;
     assert_int_equal(sc_bvh_build(&m, &cfg, &bad), SC_ERR_INVALID_ARGUMENT);
     sc_bvh_free(ref);
-    free(pos);
-    free(idx);
+    free_soup(&big);
 }
 
 int main(void)

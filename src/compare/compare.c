@@ -368,45 +368,31 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
     return st;
 }
 
-/* Speed against native Embree of the same kind, same set and threads:
- * single rays against rtcIntersect1 / rtcOccluded1 ("embree"), packets of 8
- * and 16 against "embree-p8" and "embree-p16", streams against
- * rtcIntersect1M / rtcOccluded1M ("embree-stream"). */
-static void speed_vs_embree(sc_cmp_rows *out, size_t first_row)
-{
-    for (size_t i = first_row; i < out->count; i++) {
-        const sc_tracer_def *d = sc_tracer_find(out->rows[i].tracer);
-        const int w = d ? d->packet : 0;
-        const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
-                                                                                                  : "embree";
-        for (size_t j = first_row; j < out->count; j++)
-            if (strcmp(out->rows[j].tracer, ref) == 0 && out->rows[j].rays == out->rows[i].rays &&
-                out->rows[j].threads == out->rows[i].threads)
-                out->rows[i].speed_vs_embree = out->rows[i].mrays_per_s / out->rows[j].mrays_per_s;
-    }
-}
-
-/* Against the best Embree of the same kind, same set and threads: for
- * single rays the faster of its medium and high builds ("embree",
- * "embree-high"), for packets and streams the one Embree tracer of that
- * width (there is one build quality of each). */
-static void best_embree(sc_cmp_rows *out, size_t first_row)
+/* Speed against native Embree of the same kind, same set and threads.
+ * speed_vs_embree: single rays against rtcIntersect1 / rtcOccluded1
+ * ("embree"), packets of 8 and 16 against "embree-p8" and "embree-p16",
+ * streams against rtcIntersect1M / rtcOccluded1M ("embree-stream").
+ * best_embree: against the faster of that one and, for single rays,
+ * "embree-high" (packets and streams have one Embree build quality each). */
+static void embree_ratios(sc_cmp_rows *out, size_t first_row)
 {
     for (size_t i = first_row; i < out->count; i++) {
         sc_cmp_row *row = &out->rows[i];
         const sc_tracer_def *d = sc_tracer_find(row->tracer);
         const int w = d ? d->packet : 0;
-        const char *refs[2] = { w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
-                                                                                                        : "embree",
-                                w == 0 ? "embree-high" : NULL };
+        const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
+                                                                                                  : "embree";
+        const char *high = w == 0 ? "embree-high" : NULL;
         const sc_cmp_row *best = NULL;
         for (size_t j = first_row; j < out->count; j++) {
             const sc_cmp_row *o = &out->rows[j];
             if (o->rays != row->rays || o->threads != row->threads)
                 continue;
-            for (int k = 0; k < 2; k++)
-                if (refs[k] && strcmp(o->tracer, refs[k]) == 0 && (!best || o->mrays_per_s > best->mrays_per_s))
-                    best = o;
+            const int is_ref = strcmp(o->tracer, ref) == 0;
+            if (is_ref)
+                row->speed_vs_embree = row->mrays_per_s / o->mrays_per_s;
+            if ((is_ref || (high && strcmp(o->tracer, high) == 0)) && (!best || o->mrays_per_s > best->mrays_per_s))
+                best = o;
         }
         if (best) {
             row->best_embree = row->mrays_per_s / best->mrays_per_s;
@@ -444,10 +430,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         for (int k = 0; k < SC_RAYS_KIND_COUNT && st == SC_OK; k++)
             if ((opt->ray_kinds & (1u << k)) && r.sets[k].count)
                 st = run_set(&r, k, out);
-    if (st == SC_OK) {
-        speed_vs_embree(out, first_row);
-        best_embree(out, first_row);
-    }
+    if (st == SC_OK)
+        embree_ratios(out, first_row);
     run_free(&r);
     return st;
 }
