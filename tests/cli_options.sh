@@ -90,7 +90,8 @@ if "$S" compare --help | grep -q 'embree-high'; then
                # the CSV rounds Mrays/s to 3 decimals: a few per cent on the
                # slow rows of a sanitizer build
                if (f[c["best_embree"]] - want > 0.05 * want || want - f[c["best_embree"]] > 0.05 * want) { print "best_embree " f[c["best_embree"]] ", wanted " want; bad = 1 }
-               if (f[c["best_embree"]] > 1.0001 * f[c["speed_vs_embree"]]) { print "best_embree " f[c["best_embree"]] " above speed_vs_embree " f[c["speed_vs_embree"]]; bad = 1 }
+               # speed_vs_embree is written with 3 decimals, best_embree with 4 digits
+               if (f[c["best_embree"]] > f[c["speed_vs_embree"]] + 0.0006) { print "best_embree " f[c["best_embree"]] " above speed_vs_embree " f[c["speed_vs_embree"]]; bad = 1 }
                if (f[c["embree_build"]] !~ /libembree3/) { print "embree_build " f[c["embree_build"]]; bad = 1 }
                if (f[c["mxcsr"]] != "ftz" || f[c["loops"]] < 1) { print "mxcsr/loops " f[c["mxcsr"]] " " f[c["loops"]]; bad = 1 }
                n++
