@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -210,6 +211,74 @@ static void test_grid_reaches_a_million(void **state)
     sc_scene_free(s);
 }
 
+/* Emission from a scene file and from an OBJ material (Ke), inline
+ * vertices and faces with the entry's transform. */
+static void test_emission_and_inline(void **state)
+{
+    (void)state;
+    const char *text =
+        "{\"meshes\": ["
+        " {\"vertices\": [[0,0,0],[1,0,0],[1,1,0],[0,1,0]], \"faces\": [[0,1,2,3]], \"translate\": [0, 0, 2],"
+        "  \"scale\": 2, \"emission\": [3, 2, 1]},"
+        " {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"faces\": [[0,1,2]], \"color\": [0.1, 0.2, 0.3]}],"
+        " \"lights\": []}";
+    sc_scene *s = NULL;
+    char err[512];
+    assert_int_equal(sc_scene_load_json_text(text, strlen(text), "t", NULL, NULL, &s, err, sizeof err), SC_OK);
+    sc_scene_view v;
+    sc_scene_get_view(s, &v);
+    assert_int_equal(v.mesh.triangle_count, 3);
+    assert_int_equal(v.num_meshes, 2);
+    /* The quad split along 0-2, scaled by 2 and moved to z = 2. */
+    const uint32_t *t1 = sc_mesh_triangle(&v.mesh, 1);
+    const float *p = sc_mesh_vertex(&v.mesh, t1[2]);
+    assert_float_equal(p[0], 0.0f, 0);
+    assert_float_equal(p[1], 2.0f, 0);
+    assert_float_equal(p[2], 2.0f, 0);
+    assert_float_equal(v.mesh_emission[0], 3.0f, 0);
+    assert_float_equal(v.mesh_emission[1], 2.0f, 0);
+    assert_float_equal(v.mesh_emission[2], 1.0f, 0);
+    for (int i = 3; i < 6; i++)
+        assert_float_equal(v.mesh_emission[i], 0.0f, 0);
+    assert_float_equal(v.mesh_colors[4], 0.2f, 0);
+    const float bad[3] = { 0, -1, 0 }, ok[3] = { 0.5f, 0, 0 };
+    assert_int_equal(sc_scene_set_mesh_emission(s, 2, ok), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_scene_set_mesh_emission(s, 1, bad), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_scene_set_mesh_emission(s, 1, ok), SC_OK);
+    sc_scene_get_view(s, &v);
+    assert_float_equal(v.mesh_emission[3], 0.5f, 0);
+    sc_scene_free(s);
+
+    /* An OBJ whose material has Ke, through the import child and in process. */
+    char dir[] = "/tmp/sc_emitXXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char obj[256], mtl[256];
+    snprintf(obj, sizeof obj, "%s/lamp.obj", dir);
+    snprintf(mtl, sizeof mtl, "%s/lamp.mtl", dir);
+    FILE *f = fopen(mtl, "w");
+    assert_non_null(f);
+    fputs("newmtl lamp\nKd 0.5 0.5 0.5\nKe 4 5 6\n", f);
+    fclose(f);
+    f = fopen(obj, "w");
+    assert_non_null(f);
+    fputs("mtllib lamp.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl lamp\nf 1 2 3\n", f);
+    fclose(f);
+    for (int in_process = 0; in_process < 2; in_process++) {
+        sc_scene_options o;
+        sc_scene_options_init(&o);
+        o.import_in_process = in_process;
+        assert_int_equal(sc_scene_load(obj, &o, &s, err, sizeof err), SC_OK);
+        sc_scene_get_view(s, &v);
+        assert_int_equal(v.num_meshes, 1);
+        assert_float_equal(v.mesh_emission[0], 4.0f, 0);
+        assert_float_equal(v.mesh_emission[2], 6.0f, 0);
+        sc_scene_free(s);
+    }
+    remove(obj);
+    remove(mtl);
+    rmdir(dir);
+}
+
 static void test_raw_buffers(void **state)
 {
     (void)state;
@@ -365,6 +434,7 @@ int main(void)
         cmocka_unit_test(test_procedural_counts_and_seed),
         cmocka_unit_test(test_grid_reaches_a_million),
         cmocka_unit_test(test_raw_buffers),
+        cmocka_unit_test(test_emission_and_inline),
         cmocka_unit_test(test_json_fixture),
         cmocka_unit_test(test_cache_prefix),
         cmocka_unit_test(test_cgal_meshes),

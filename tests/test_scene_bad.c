@@ -284,6 +284,14 @@ static void test_bad_json(void **state)
         { "{ \"meshes\": [ {\"file\": \"proc:sphere:60M\"} ] }", SC_ERR_LIMIT, "cap" },
         { "{ \"meshes\": [ {\"file\": \"proc:grid:proc:sphere:1000:60M\"} ] }", SC_ERR_LIMIT, "cap" },
         { "{ \"meshes\": [ {\"file\": \"other.json\"} ] }", SC_ERR_PARSE, "scene file" },
+        { "{ \"meshes\": [ {\"file\": \"proc:sphere:100\", \"emission\": [1, -1, 0]} ] }", SC_ERR_PARSE, "emission" },
+        { "{ \"meshes\": [ {\"file\": \"proc:sphere:100\", \"emission\": [1, 1e9, 0]} ] }", SC_ERR_PARSE, "emission" },
+        { "{ \"meshes\": [ {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"faces\": [[0,1,3]]} ] }", SC_ERR_PARSE, "faces[0]" },
+        { "{ \"meshes\": [ {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"faces\": [[0,1]]} ] }", SC_ERR_PARSE, "3 or 4" },
+        { "{ \"meshes\": [ {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"faces\": [[0,1,1.5]]} ] }", SC_ERR_PARSE, "faces[0]" },
+        { "{ \"meshes\": [ {\"vertices\": [[0,0,0],[1,0],[0,1,0]], \"faces\": [[0,1,2]]} ] }", SC_ERR_PARSE, "vertices[1]" },
+        { "{ \"meshes\": [ {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]]} ] }", SC_ERR_PARSE, "faces" },
+        { "{ \"meshes\": [ {\"vertices\": [], \"faces\": []} ] }", SC_ERR_PARSE, "non-empty" },
         /* cJSON skips a UTF-8 byte-order mark; the content decides. */
         { "\xef\xbb\xbf{ \"meshes\": [] }", SC_ERR_PARSE, "non-empty" },
     };

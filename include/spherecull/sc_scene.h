@@ -1,8 +1,8 @@
 /* spherecull — scenes: only what a ray tracer needs.
  *
  * A scene is one flat triangle soup (float positions, uint32 indices, one
- * mesh id per triangle), one RGB colour per mesh, a pinhole camera, lights
- * and a background. Node transforms are flattened at load time; textures,
+ * mesh id per triangle), one RGB colour and one emitted radiance per mesh, a
+ * pinhole camera, lights and a background. Node transforms are flattened at load time; textures,
  * normals, animation and bones are not kept.
  *
  * Sources (sc_scene_load's spec):
@@ -68,6 +68,7 @@ extern "C" {
 #define SC_SCENE_DEFAULT_HEIGHT 600
 #define SC_SCENE_MAX_WARNINGS 16
 #define SC_SCENE_DEFAULT_IMPORT_TIMEOUT_MS 120000u
+#define SC_SCENE_MAX_EMISSION 1e6f   /* per RGB component */
 
 typedef struct sc_scene sc_scene;   /* opaque */
 
@@ -123,6 +124,11 @@ typedef struct sc_scene_view {
     sc_camera camera;           /* always valid for sc_camera_frame_make */
     float background[3];
     float ambient;              /* constant ambient term in [0, 1] */
+    /* 3 per mesh: linear radiance the front side of the mesh's triangles
+     * emits (the side (V1 - V0) x (V2 - V0) points to; 0: none), for the
+     * path tracer; from a scene file's "emission" or a mesh file's emissive
+     * material colour. */
+    const float *mesh_emission;
 } sc_scene_view;
 
 typedef struct sc_scene_stats {
@@ -165,6 +171,10 @@ SC_API sc_status sc_scene_create(const sc_scene_options *options, sc_scene **out
 SC_API sc_status sc_scene_add_mesh(sc_scene *scene, const float *positions, size_t num_vertices,
                                    const uint32_t *indices, size_t num_triangles,
                                    const float color[3], char *err, size_t errlen);
+
+/* Sets the radiance mesh (an index < num_meshes, in the order meshes were
+ * added) emits from its front side; components in [0, SC_SCENE_MAX_EMISSION]. */
+SC_API sc_status sc_scene_set_mesh_emission(sc_scene *scene, size_t mesh, const float rgb[3]);
 
 SC_API sc_status sc_scene_add_light(sc_scene *scene, const sc_light *light);
 SC_API sc_status sc_scene_set_camera(sc_scene *scene, const sc_camera *camera);

@@ -101,6 +101,26 @@ static void mat_mul(double o[16], const double a[16], const double b[16])
     memcpy(o, r, sizeof r);
 }
 
+/* The author's material of mesh, or NULL for none or one of assimp's
+ * placeholders (they carry assimp's colours, not the author's). */
+static const struct aiMaterial *mesh_material(const walk_ctx *w, const struct aiMesh *mesh)
+{
+    if (mesh->mMaterialIndex >= w->ai->mNumMaterials || !w->ai->mMaterials)
+        return NULL;
+    const struct aiMaterial *mat = w->ai->mMaterials[mesh->mMaterialIndex];
+    if (!mat)
+        return NULL;
+    struct aiString name;
+    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS) {
+        if (strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
+            return NULL;
+        for (int i = 0; i < w->log->nmissing; i++)
+            if (strcmp(name.data, w->log->missing[i]) == 0)
+                return NULL;
+    }
+    return mat;
+}
+
 static void mesh_color(const walk_ctx *w, const struct aiMesh *mesh, float out[3])
 {
     out[0] = out[1] = out[2] = SC_DEFAULT_GREY;
@@ -108,27 +128,31 @@ static void mesh_color(const walk_ctx *w, const struct aiMesh *mesh, float out[3
         memcpy(out, w->color_override, 3 * sizeof(float));
         return;
     }
-    if (mesh->mMaterialIndex >= w->ai->mNumMaterials || !w->ai->mMaterials)
-        return;
-    const struct aiMaterial *mat = w->ai->mMaterials[mesh->mMaterialIndex];
-    if (!mat)
-        return;
-    struct aiString name;
-    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS) {
-        /* assimp's own placeholders carry its colours, not the author's. */
-        if (strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
-            return;
-        for (int i = 0; i < w->log->nmissing; i++)
-            if (strcmp(name.data, w->log->missing[i]) == 0)
-                return;
-    }
+    const struct aiMaterial *mat = mesh_material(w, mesh);
     struct aiColor4D c;
-    if (aiGetMaterialColor(mat, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS ||
-        aiGetMaterialColor(mat, AI_MATKEY_BASE_COLOR, &c) == aiReturn_SUCCESS) {
+    if (mat && (aiGetMaterialColor(mat, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS ||
+                aiGetMaterialColor(mat, AI_MATKEY_BASE_COLOR, &c) == aiReturn_SUCCESS)) {
         out[0] = (float)c.r;
         out[1] = (float)c.g;
         out[2] = (float)c.b;
     }
+}
+
+/* The emissive colour of the material (OBJ's Ke, glTF's emissiveFactor,
+ * ...) as radiance; 0 when absent or out of range. */
+static int mesh_emission(const walk_ctx *w, const struct aiMesh *mesh, float out[3])
+{
+    const struct aiMaterial *mat = mesh_material(w, mesh);
+    struct aiColor4D c;
+    if (!mat || aiGetMaterialColor(mat, AI_MATKEY_COLOR_EMISSIVE, &c) != aiReturn_SUCCESS)
+        return 0;
+    out[0] = (float)c.r;
+    out[1] = (float)c.g;
+    out[2] = (float)c.b;
+    for (int i = 0; i < 3; i++)
+        if (!(out[i] >= 0 && out[i] <= SC_SCENE_MAX_EMISSION))
+            return 0;
+    return out[0] > 0 || out[1] > 0 || out[2] > 0;
 }
 
 static sc_status add_ai_mesh(walk_ctx *w, const struct aiMesh *mesh, const double m[16])
@@ -187,9 +211,13 @@ static sc_status add_ai_mesh(walk_ctx *w, const struct aiMesh *mesh, const doubl
             w->tmp_idx[3 * t + k] = face->mIndices[k];
         t++;
     }
-    float color[3];
+    float color[3], emission[3];
     mesh_color(w, mesh, color);
-    return sc_scene_add_mesh(w->s, w->tmp_pos, nv, w->tmp_idx, nt, color, w->err, w->errlen);
+    size_t id = w->s->num_meshes;
+    st = sc_scene_add_mesh(w->s, w->tmp_pos, nv, w->tmp_idx, nt, color, w->err, w->errlen);
+    if (st == SC_OK && w->s->num_meshes > id && mesh_emission(w, mesh, emission))
+        st = sc_scene_set_mesh_emission(w->s, id, emission);
+    return st;
 }
 
 static sc_status walk(walk_ctx *w, const struct aiNode *node, const double parent[16], int depth)

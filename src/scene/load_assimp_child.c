@@ -37,7 +37,7 @@
 void sc_scene_assimp_child_hooks(void (*on_terminate)(const char *message),
                                  void (*on_out_of_memory)(void));
 
-#define MAGIC_HEAD 0x53434d31u   /* "SCM1" */
+#define MAGIC_HEAD 0x53434d32u   /* "SCM2" */
 #define MAGIC_TAIL 0x53434d45u   /* "SCME" */
 #define MAX_ERR 1024
 #define MAX_WARN_LEN 512
@@ -236,6 +236,7 @@ static void run_child(int fd, const sc_scene *parent, const char *path, const do
           write_all(fd, s->indices, s->num_triangles * 3 * sizeof(uint32_t)) ||
           write_all(fd, s->mesh_ids, s->num_triangles * sizeof(uint32_t)) ||
           write_all(fd, s->mesh_colors, s->num_meshes * 3 * sizeof(float)) ||
+          write_all(fd, s->mesh_emission, s->num_meshes * 3 * sizeof(float)) ||
           write_all(fd, &tail, sizeof tail);
     _exit(bad ? 1 : 0);
 }
@@ -346,7 +347,8 @@ static sc_status receive_scene(sc_scene *s, reader *r, const wire_head *h, const
     sc_status st = sc_scene_reserve(s, (size_t)nv, (size_t)nt, err, errlen);
     if (st != SC_OK)
         return st;
-    float *colors = malloc(nm ? nm * 3 * sizeof(float) : 1);
+    /* Colours then emission, 3 floats each per mesh. */
+    float *colors = malloc(nm ? nm * 6 * sizeof(float) : 1);
     if (!colors)
         return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     float *pos = s->positions + 3 * s->num_vertices;
@@ -354,7 +356,7 @@ static sc_status receive_scene(sc_scene *s, reader *r, const wire_head *h, const
     uint32_t *ids = s->mesh_ids + s->num_triangles;
     uint32_t tail = 0;
     if (read_all(r, pos, nv * 3 * sizeof(float)) || read_all(r, idx, nt * 3 * sizeof(uint32_t)) ||
-        read_all(r, ids, nt * sizeof(uint32_t)) || read_all(r, colors, nm * 3 * sizeof(float)) ||
+        read_all(r, ids, nt * sizeof(uint32_t)) || read_all(r, colors, nm * 6 * sizeof(float)) ||
         read_all(r, &tail, sizeof tail) || tail != MAGIC_TAIL) {
         free(colors);
         return SC_OK;   /* not drained: the caller describes the crash or the timeout */
@@ -378,6 +380,8 @@ static sc_status receive_scene(sc_scene *s, reader *r, const wire_head *h, const
     for (size_t m = 0; m < nm; m++) {
         uint32_t id;
         st = sc_scene_new_mesh(s, colors + 3 * m, &id);
+        if (st == SC_OK && sc_scene_set_mesh_emission(s, id, colors + 3 * (nm + m)) != SC_OK)
+            st = SC_ERR_PARSE;   /* out of range: a garbled stream */
         if (st != SC_OK) {
             s->num_meshes = first_mesh;
             free(colors);

@@ -17,6 +17,7 @@
 #define MAX_JSON_BYTES (16u << 20)
 #define MAX_MESHES_IN_JSON 100000
 #define MAX_LIGHTS 1024
+#define MAX_INLINE_VERTICES 1000000
 #define PI 3.14159265358979323846
 
 typedef struct jctx {
@@ -171,6 +172,92 @@ static int mesh_transform(jctx *c, const cJSON *m, const char *where, double xf[
     return 0;
 }
 
+/* Radiance: any non-negative value up to SC_SCENE_MAX_EMISSION. */
+static int get_emission(jctx *c, const cJSON *obj, const char *where, float out[3])
+{
+    double d[3];
+    int r = get_vec3(c, obj, "emission", where, SC_SCENE_MAX_EMISSION, d);
+    if (r == 1) {
+        for (int i = 0; i < 3; i++)
+            if (d[i] < 0) {
+                JERR(c, SC_ERR_PARSE, "%s: %semission components must be >= 0", c->path, where);
+                return -1;
+            }
+        for (int i = 0; i < 3; i++)
+            out[i] = (float)d[i];
+    }
+    return r;
+}
+
+/* A mesh written in the file: "vertices" [[x,y,z], ...] and "faces"
+ * [[i,j,k] or [i,j,k,l], ...] (a quad is split along i-k), with the entry's
+ * transform applied. For walls, boxes and area lights without a mesh file. */
+static sc_status load_inline_mesh(jctx *c, const cJSON *m, const char *where, const double *xf,
+                                  const float *color)
+{
+    const cJSON *vs = cJSON_GetObjectItemCaseSensitive(m, "vertices");
+    const cJSON *fs = cJSON_GetObjectItemCaseSensitive(m, "faces");
+    if (!cJSON_IsArray(vs) || !cJSON_IsArray(fs) || cJSON_GetArraySize(vs) == 0 ||
+        cJSON_GetArraySize(fs) == 0)
+        return JERR(c, SC_ERR_PARSE, "%s: %svertices and %sfaces must be non-empty arrays", c->path,
+                    where, where);
+    size_t nv = (size_t)cJSON_GetArraySize(vs), nf = (size_t)cJSON_GetArraySize(fs);
+    if (nv > MAX_INLINE_VERTICES || nf > MAX_INLINE_VERTICES)
+        return JERR(c, SC_ERR_LIMIT, "%s: %smore than %d vertices or faces written inline", c->path,
+                    where, MAX_INLINE_VERTICES);
+    float *pos = malloc(nv * 3 * sizeof(float));
+    uint32_t *idx = malloc(nf * 6 * sizeof(uint32_t));
+    sc_status st = SC_OK;
+    if (!pos || !idx) {
+        st = JERR(c, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", c->path);
+        goto done;
+    }
+    size_t i = 0;
+    for (const cJSON *v = vs->child; v; v = v->next, i++) {
+        double p[3];
+        int ok = cJSON_IsArray(v) && cJSON_GetArraySize(v) == 3;
+        for (int k = 0; ok && k < 3; k++) {
+            const cJSON *e = cJSON_GetArrayItem(v, k);
+            ok = cJSON_IsNumber(e) && isfinite(e->valuedouble) && fabs(e->valuedouble) <= 1e30;
+            p[k] = ok ? e->valuedouble : 0;
+        }
+        if (!ok) {
+            st = JERR(c, SC_ERR_PARSE, "%s: %svertices[%zu] must be an array of 3 numbers with |x| <= 1e+30",
+                      c->path, where, i);
+            goto done;
+        }
+        for (int r = 0; r < 3; r++)
+            pos[3 * i + r] = (float)(xf ? xf[4 * r] * p[0] + xf[4 * r + 1] * p[1] + xf[4 * r + 2] * p[2] +
+                                              xf[4 * r + 3]
+                                        : p[r]);
+    }
+    size_t nt = 0, f = 0;
+    for (const cJSON *face = fs->child; face; face = face->next, f++) {
+        int n = cJSON_IsArray(face) ? cJSON_GetArraySize(face) : 0;
+        uint32_t q[4];
+        int ok = n == 3 || n == 4;
+        for (int k = 0; ok && k < n; k++) {
+            const cJSON *e = cJSON_GetArrayItem(face, k);
+            ok = cJSON_IsNumber(e) && e->valuedouble >= 0 && e->valuedouble < (double)nv &&
+                 e->valuedouble == floor(e->valuedouble);
+            q[k] = ok ? (uint32_t)e->valuedouble : 0;
+        }
+        if (!ok) {
+            st = JERR(c, SC_ERR_PARSE, "%s: %sfaces[%zu] must hold 3 or 4 vertex indices below %zu",
+                      c->path, where, f, nv);
+            goto done;
+        }
+        idx[3 * nt] = q[0], idx[3 * nt + 1] = q[1], idx[3 * nt + 2] = q[2], nt++;
+        if (n == 4)
+            idx[3 * nt] = q[0], idx[3 * nt + 1] = q[2], idx[3 * nt + 2] = q[3], nt++;
+    }
+    st = sc_scene_add_mesh(c->s, pos, nv, idx, nt, color, c->err, c->errlen);
+done:
+    free(pos);
+    free(idx);
+    return st;
+}
+
 static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
 {
     const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
@@ -180,7 +267,8 @@ static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
         return JERR(c, SC_ERR_PARSE, "%s: \"meshes\" must be a non-empty array", c->path);
     if (cJSON_GetArraySize(meshes) > MAX_MESHES_IN_JSON)
         return JERR(c, SC_ERR_LIMIT, "%s: more than %d meshes", c->path, MAX_MESHES_IN_JSON);
-    static const char *const known[] = { "file", "color", "scale", "rotate", "translate", "name", NULL };
+    static const char *const known[] = { "file", "vertices", "faces", "color", "emission", "scale",
+                                         "rotate", "translate", "name", NULL };
     int i = 0;
     for (const cJSON *m = meshes->child; m; m = m->next, i++) {
         char where[48];
@@ -189,23 +277,32 @@ static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
             return JERR(c, SC_ERR_PARSE, "%s: meshes[%d] must be an object", c->path, i);
         warn_unknown_keys(c, m, "a mesh", known);
         const cJSON *f = cJSON_GetObjectItemCaseSensitive(m, "file");
-        if (!cJSON_IsString(f) || !f->valuestring[0])
-            return JERR(c, SC_ERR_PARSE, "%s: %sfile must be a non-empty string", c->path, where);
-        float color[3];
+        int inline_mesh = !f && cJSON_GetObjectItemCaseSensitive(m, "vertices");
+        if (!inline_mesh && (!cJSON_IsString(f) || !f->valuestring[0]))
+            return JERR(c, SC_ERR_PARSE, "%s: %sfile must be a non-empty string (or give vertices and faces)",
+                        c->path, where);
+        float color[3], emission[3];
         int has_color = get_color(c, m, "color", where, color);
         if (has_color < 0)
+            return SC_ERR_PARSE;
+        int has_emission = get_emission(c, m, where, emission);
+        if (has_emission < 0)
             return SC_ERR_PARSE;
         double xf[16];
         int any;
         if (mesh_transform(c, m, where, xf, &any) < 0)
             return SC_ERR_PARSE;
-        size_t before = c->s->num_triangles;
-        sc_status st = c->append_mesh(c->s, f->valuestring, base_dir, any ? xf : NULL,
-                                      has_color == 1 ? color : NULL, c->err, c->errlen);
+        size_t before = c->s->num_triangles, first_mesh = c->s->num_meshes;
+        sc_status st = inline_mesh ? load_inline_mesh(c, m, where, any ? xf : NULL, has_color == 1 ? color : NULL)
+                                   : c->append_mesh(c->s, f->valuestring, base_dir, any ? xf : NULL,
+                                                    has_color == 1 ? color : NULL, c->err, c->errlen);
         if (st != SC_OK)
             return st;
         if (c->s->num_triangles == before)
-            sc_scene_warnf(c->s, "%s: %s'%s' added no triangles", c->path, where, f->valuestring);
+            sc_scene_warnf(c->s, "%s: %s'%s' added no triangles", c->path, where,
+                           inline_mesh ? "vertices" : f->valuestring);
+        for (size_t k = first_mesh; has_emission == 1 && k < c->s->num_meshes; k++)
+            sc_scene_set_mesh_emission(c->s, k, emission);
     }
     return SC_OK;
 }

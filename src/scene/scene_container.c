@@ -164,6 +164,7 @@ void sc_scene_free(sc_scene *s)
     free(s->indices);
     free(s->mesh_ids);
     free(s->mesh_colors);
+    free(s->mesh_emission);
     free(s->lights);
     free(s->cache_dir);
     free(s);
@@ -226,11 +227,14 @@ sc_status sc_scene_new_mesh(sc_scene *s, const float color[3], uint32_t *id)
 {
     if (s->num_meshes >= UINT32_MAX)
         return SC_ERR_LIMIT;
-    if (!grow((void **)&s->mesh_colors, &s->cap_meshes, s->num_meshes + 1, 3 * sizeof(float)))
+    if (!grow((void **)&s->mesh_colors, &s->cap_meshes, s->num_meshes + 1, 3 * sizeof(float)) ||
+        !grow((void **)&s->mesh_emission, &s->cap_emission, s->num_meshes + 1, 3 * sizeof(float)))
         return SC_ERR_OUT_OF_MEMORY;
     float *c = s->mesh_colors + 3 * s->num_meshes;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 3; i++) {
         c[i] = color ? clamp01(color[i], SC_DEFAULT_GREY) : SC_DEFAULT_GREY;
+        s->mesh_emission[3 * s->num_meshes + i] = 0.0f;
+    }
     *id = (uint32_t)s->num_meshes++;
     return SC_OK;
 }
@@ -348,6 +352,17 @@ sc_status sc_scene_add_mesh(sc_scene *s, const float *positions, size_t nv,
     if (st != SC_OK)
         s->num_meshes--;   /* nothing refers to it yet */
     return st;
+}
+
+sc_status sc_scene_set_mesh_emission(sc_scene *s, size_t mesh, const float rgb[3])
+{
+    if (!s || !rgb || mesh >= s->num_meshes)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (int i = 0; i < 3; i++)
+        if (!(rgb[i] >= 0 && rgb[i] <= SC_SCENE_MAX_EMISSION))
+            return SC_ERR_INVALID_ARGUMENT;
+    memcpy(s->mesh_emission + 3 * mesh, rgb, 3 * sizeof(float));
+    return SC_OK;
 }
 
 sc_status sc_scene_add_light(sc_scene *s, const sc_light *l)
@@ -478,6 +493,7 @@ sc_status sc_scene_get_view(const sc_scene *s, sc_scene_view *v)
     v->mesh.indices = s->indices;
     v->mesh_ids = s->mesh_ids;
     v->mesh_colors = s->mesh_colors;
+    v->mesh_emission = s->mesh_emission;
     v->lights = s->lights;
     v->mesh.vertex_count = s->num_vertices;
     v->mesh.triangle_count = s->num_triangles;

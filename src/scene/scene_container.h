@@ -15,9 +15,10 @@ struct sc_scene {
     uint32_t *indices;
     uint32_t *mesh_ids;
     float *mesh_colors;
+    float *mesh_emission;           /* 3 per mesh, like mesh_colors */
     sc_light *lights;
     size_t num_vertices, num_triangles, num_meshes, num_lights;
-    size_t cap_vertices, cap_triangles, cap_mesh_ids, cap_meshes, cap_lights;
+    size_t cap_vertices, cap_triangles, cap_mesh_ids, cap_meshes, cap_emission, cap_lights;
     sc_camera camera;
     float background[3];
     float ambient;
