@@ -11,3 +11,7 @@ endif()
 if(TARGET spherecull_render AND TARGET spherecull_scene)
   sc_add_test(test_render SOURCES test_render.c LIBS spherecull_render spherecull_scene)
 endif()
+if(TARGET spherecull_render AND TARGET spherecull_scene)
+  # The path tracer; with Embree built also its agreement with our tracer.
+  sc_add_test(test_path SOURCES test_path.c LIBS spherecull_render spherecull_scene spherecull_compare FTZ)
+endif()

@@ -1,12 +1,43 @@
-/* spherecull — a small renderer over the BVH tracer: pinhole camera, Lambert
- * shading, hard shadows from any-hit shadow rays, optional ambient
- * occlusion, and debug views. OpenMP over 16x16 tiles.
+/* spherecull — a small renderer over the BVH tracer (or any back end with a
+ * closest-hit and an occlusion query), OpenMP over 16x16 tiles. Two
+ * integrators:
  *
- * Deterministic: every random number (AO directions) is drawn from a stream
- * seeded by (seed, pixel), so the image does not depend on the thread count
- * or the order tiles finish in.
+ *   SC_RENDER_DIRECT  Lambert shading, hard shadows from any-hit shadow rays,
+ *                     optional ambient occlusion, and the debug views; one
+ *                     ray per pixel centre; encoded with gamma 1/2.2.
+ *   SC_RENDER_PATH    a path tracer: Lambert surfaces (the mesh colour),
+ *                     emissive meshes (sc_scene_view.mesh_emission, from
+ *                     the front side), the background as a constant environment,
+ *                     cosine-weighted bounces, next-event estimation to the
+ *                     point, directional and emissive-triangle lights, the
+ *                     emitters combined with the bounce rays by multiple
+ *                     importance sampling (power heuristic), Russian
+ *                     roulette from rr_depth on. spp jittered samples per
+ *                     pixel (box filter), radiance accumulated in float,
+ *                     then tone mapped: x 2^exposure, clamped to [0, 1],
+ *                     sRGB transfer curve (IEC 61966-2-1).
  *
- * Colours are linear; the image is encoded with gamma 1/2.2.
+ * Light units are those of the direct integrator in both: a point light of
+ * colour C at distance d lights a white surface facing it to radiance C / d^2
+ * (directional: C), i.e. its irradiance is pi C / d^2. An emissive mesh of
+ * emission E seen directly has radiance E.
+ *
+ * Path length: --bounces B scatters at the first B surface hits (next-event
+ * estimation and a bounce ray at each); the last bounce ray only collects
+ * what it sees (emission, background). B = 0 shows emitters and background,
+ * B = 1 direct lighting, as pbrt's maxdepth.
+ *
+ * Deterministic: every random number is drawn from a stream seeded by (seed,
+ * pixel, sample) (xoshiro256** seeded by splitmix64), so the image does not
+ * depend on the thread count, the order tiles finish in or the back end's
+ * batching. The path tracer recomputes each hit point from the primitive the
+ * back end reports (ray-plane intersection in double), so two back ends that
+ * report the same primitives produce the same image bit for bit; they can
+ * differ only where some ray of a pixel's paths passes close to a triangle
+ * edge, which sc_render_options.edge reports.
+ *
+ * Threads: sc_render may run on several scenes and BVHs at once; one call
+ * uses opt->threads OpenMP threads and calls the back end from all of them.
  */
 #ifndef SPHERECULL_SC_RENDER_H
 #define SPHERECULL_SC_RENDER_H
@@ -34,34 +65,81 @@ typedef enum sc_render_debug {
     SC_RENDER_DEBUG_COUNT
 } sc_render_debug;
 
+typedef enum sc_render_integrator {
+    SC_RENDER_DIRECT = 0,
+    SC_RENDER_PATH,
+    SC_RENDER_INTEGRATOR_COUNT
+} sc_render_integrator;
+
+/* The queries a renderer needs, over a batch of n rays (up to a tile's
+ * 256): closest hits (prim = SC_HITREC_MISS for a miss) and occlusion
+ * (1 if anything lies in [tmin, tmax]). coherent is 1 for camera rays in
+ * tile order, 0 for bounce and shadow rays. Called from every render thread
+ * at once, so both must be thread-safe. Both back ends of `spherecull render
+ * --tracer` are one of these. */
+typedef struct sc_render_backend {
+    sc_status (*closest)(void *ctx, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent);
+    sc_status (*occluded)(void *ctx, const sc_ray *rays, size_t n, uint8_t *occluded, int coherent);
+    void *ctx;
+} sc_render_backend;
+
 typedef struct sc_render_options {
-    sc_render_debug debug;
+    sc_render_debug debug;   /* DIRECT only */
     int ao_samples;          /* 0: constant ambient term */
     uint64_t seed;
     int threads;             /* 0: OpenMP's default */
     int shadows;             /* 1: shadow rays (default), 0: none */
     int trace_stats;         /* 1: per-ray traversal counters (slower kernels) */
-    /* Called from one thread with the fraction done; may be NULL. */
-    void (*progress)(void *ctx, double fraction);
+    /* Called from one thread with the fraction of tiles done and the rays
+     * traced in them so far; may be NULL. */
+    void (*progress)(void *ctx, double fraction, uint64_t rays);
     void *progress_ctx;
+
+    sc_render_integrator integrator;
+    int spp;                 /* PATH: samples per pixel, 1..65536 */
+    int bounces;             /* PATH: scatterings per path, 0..64 (see the top) */
+    int rr_depth;            /* PATH: Russian roulette from this bounce on, >= 1 */
+    double exposure;         /* PATH: stops, radiance x 2^exposure before the tone map */
+    /* NULL: bvh through sc_trace_closest_n / sc_trace_any_n. Otherwise bvh
+     * may be NULL (trace_stats and the heat view need bvh). */
+    const sc_render_backend *backend;
+    /* Polled between tiles (set it from a signal handler): nonzero stops
+     * the render, which returns SC_ERR_CANCELLED and no image. May be NULL. */
+    const volatile int *cancel;
+    /* PATH, optional (may be NULL), width x height entries, row-major:
+     * radiance the mean linear radiance per pixel, 3 floats; edge 1 where a
+     * hit of some path of the pixel had a barycentric coordinate below
+     * SC_RENDER_EDGE_BARY (a back end may legitimately report the
+     * neighbouring triangle there), else 0. */
+    float *radiance;
+    uint8_t *edge;
 } sc_render_options;
+
+#define SC_RENDER_EDGE_BARY 1e-5
 
 typedef struct sc_render_stats {
     uint64_t primary_rays, shadow_rays, ao_rays;
+    uint64_t bounce_rays;    /* PATH: rays after the camera ray */
     double seconds;          /* wall time of the render loop */
     sc_trace_stats trace;    /* summed over all rays; zero unless opt->trace_stats */
 } sc_render_stats;
 
-/* Defaults: shaded, no AO, seed 1, all threads, shadows on. */
+/* Defaults: direct, shaded, no AO, seed 1, all threads, shadows on; for
+ * the path tracer 16 spp, 4 bounces, roulette from 3, exposure 0. */
 SC_API void sc_render_options_init(sc_render_options *opt);
 
 /* "shaded", "normals", "depth", "id", "heat". */
 SC_API const char *sc_render_debug_name(sc_render_debug debug);
 SC_API sc_status sc_render_debug_from_name(const char *name, sc_render_debug *out);
 
-/* Renders view (camera, lights, colours) traced through bvh, which must have
- * been built from view's positions and indices (hit.prim indexes them).
- * out is allocated here (free with sc_image_free). stats may be NULL. */
+/* "direct", "path". */
+SC_API const char *sc_render_integrator_name(sc_render_integrator integrator);
+SC_API sc_status sc_render_integrator_from_name(const char *name, sc_render_integrator *out);
+
+/* Renders view (camera, lights, colours, emission) traced through bvh (or
+ * opt->backend), which must have been built from view's mesh (hit.prim
+ * indexes it). out is allocated here (free with sc_image_free). stats may
+ * be NULL. */
 SC_API sc_status sc_render(const sc_scene_view *view, const sc_bvh *bvh, const sc_render_options *opt,
                            sc_image *out, sc_render_stats *stats);
 

@@ -26,6 +26,7 @@ typedef enum sc_status {
     SC_ERR_IO,               /* a file could not be read or written */
     SC_ERR_PARSE,            /* a file was read but its content is malformed */
     SC_ERR_LIMIT,            /* input exceeds a configured cap (triangles, memory, pixels) */
+    SC_ERR_CANCELLED,        /* the caller asked a long call to stop (sc_render_options.cancel) */
     SC_STATUS_COUNT
 } sc_status;
 

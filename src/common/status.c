@@ -13,6 +13,7 @@ const char *sc_strerror(sc_status status)
     case SC_ERR_IO:               return "input/output error";
     case SC_ERR_PARSE:            return "malformed input";
     case SC_ERR_LIMIT:            return "input exceeds a configured limit";
+    case SC_ERR_CANCELLED:        return "cancelled";
     case SC_STATUS_COUNT:         break;
     }
     return "unknown status";

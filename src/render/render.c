@@ -1,5 +1,6 @@
-/* Tile renderer: primary rays through sc_trace_closest, shadow and AO rays
- * through sc_trace_any. */
+/* The tile loop and the direct integrator: primary rays through the back
+ * end's closest query, shadow and AO rays through its occlusion query. The
+ * path tracer's tiles are in path.c. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -12,13 +13,28 @@
 #include "common/sc_clock.h"
 #include "common/sc_names.h"
 #include "common/sc_rng.h"
-#include "spherecull/sc_render.h"
+#include "render_internal.h"
 
-#define TILE 16
+#define TILE SC_RENDER_TILE
 #define PI 3.14159265358979323846
 
 static const char *const debug_names[SC_RENDER_DEBUG_COUNT] = { "shaded", "normals", "depth", "id",
                                                                 "heat" };
+static const char *const integrator_names[SC_RENDER_INTEGRATOR_COUNT] = { "direct", "path" };
+
+const char *sc_render_integrator_name(sc_render_integrator i)
+{
+    return sc_enum_name(integrator_names, SC_RENDER_INTEGRATOR_COUNT, (int)i, "?");
+}
+
+sc_status sc_render_integrator_from_name(const char *name, sc_render_integrator *out)
+{
+    int v;
+    if (!out || sc_enum_lookup(integrator_names, SC_RENDER_INTEGRATOR_COUNT, name, &v) != 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = (sc_render_integrator)v;
+    return SC_OK;
+}
 
 const char *sc_render_debug_name(sc_render_debug d)
 {
@@ -41,19 +57,48 @@ void sc_render_options_init(sc_render_options *o)
     memset(o, 0, sizeof *o);
     o->seed = 1;
     o->shadows = 1;
+    o->integrator = SC_RENDER_DIRECT;
+    o->spp = 16;
+    o->bounces = 4;
+    o->rr_depth = 3;
 }
 
 typedef struct ctx {
-    const sc_scene_view *v;
-    const sc_bvh *bvh;
-    const sc_render_options *o;
-    sc_camera_frame frame;
-    double eps;           /* offset of secondary ray origins along the normal */
-    double ao_len;
+    sc_render_ctx r;
     float *accum;         /* 3 per pixel, linear */
     float *value;         /* depth or heat per pixel */
-    int collect;
 } ctx;
+
+sc_status sc_render_closest(const sc_render_ctx *c, const sc_ray *rays, size_t n, sc_hitrec *hits,
+                            int coherent, sc_trace_stats *stats)
+{
+    const sc_render_backend *b = c->o->backend;
+    if (b)
+        return b->closest(b->ctx, rays, n, hits, coherent);
+    return sc_trace_closest_n(c->bvh, rays, sizeof *rays, hits, sizeof *hits, n, 0, stats);
+}
+
+sc_status sc_render_occluded(const sc_render_ctx *c, const sc_ray *rays, size_t n, uint8_t *occluded,
+                             int coherent, sc_trace_stats *stats)
+{
+    const sc_render_backend *b = c->o->backend;
+    if (b)
+        return b->occluded(b->ctx, rays, n, occluded, coherent);
+    enum { CHUNK = 256 };
+    int32_t occ[CHUNK];
+    sc_status st = SC_OK;
+    for (size_t i = 0; i < n; i += CHUNK) {
+        size_t m = n - i < CHUNK ? n - i : CHUNK;
+        for (size_t k = 0; k < m; k++)
+            occ[k] = occluded[i + k];   /* a refused ray keeps what the caller put */
+        sc_status s = sc_trace_any_n(c->bvh, rays + i, sizeof *rays, occ, sizeof *occ, m, 0, stats);
+        if (s != SC_OK)
+            st = s;
+        for (size_t k = 0; k < m; k++)
+            occluded[i + k] = occ[k] != 0;
+    }
+    return st;
+}
 
 static void add_stats(sc_trace_stats *a, const sc_trace_stats *b)
 {
@@ -66,18 +111,17 @@ static void add_stats(sc_trace_stats *a, const sc_trace_stats *b)
     a->tri_hits += b->tri_hits;
 }
 
-static int occluded(const ctx *c, const double o[3], const double d[3], float tmax,
+static int occluded(const sc_render_ctx *c, const double o[3], const double d[3], float tmax,
                     sc_trace_stats *ts)
 {
     sc_ray r = { { (float)o[0], (float)o[1], (float)o[2] }, 0.0f,
                  { (float)d[0], (float)d[1], (float)d[2] }, tmax };
-    int blocked = 0;
-    if (sc_trace_any(c->bvh, &r, &blocked, c->collect ? ts : NULL) != SC_OK)
-        return 0;   /* a degenerate shadow ray (zero direction) lights the point */
+    uint8_t blocked = 0;   /* a degenerate shadow ray (zero direction) lights the point */
+    sc_render_occluded(c, &r, 1, &blocked, 0, c->collect ? ts : NULL);
     return blocked;
 }
 
-static void shade_pixel(const ctx *c, int px, int py, float rgb[3], float *value,
+static void shade_pixel(const sc_render_ctx *c, int px, int py, float rgb[3], float *value,
                         sc_render_stats *st)
 {
     const sc_scene_view *v = c->v;
@@ -89,7 +133,8 @@ static void shade_pixel(const ctx *c, int px, int py, float rgb[3], float *value
     sc_hitrec hit;
     sc_trace_stats before = st->trace;
     st->primary_rays++;
-    sc_status s = sc_trace_closest(c->bvh, &ray, &hit, c->collect ? &st->trace : NULL);
+    hit.prim = SC_HITREC_MISS;
+    sc_status s = sc_render_closest(c, &ray, 1, &hit, 1, c->collect ? &st->trace : NULL);
     if (c->o->debug == SC_RENDER_HEAT) {
         /* Sphere tests; a BVH without spheres shows its triangle tests. */
         uint64_t n = st->trace.sphere_tests - before.sphere_tests;
@@ -230,10 +275,38 @@ static void heat_color(double x, uint8_t out[3])
         out[k] = (uint8_t)lrint(255 * (stops[i][k] * (1 - t) + stops[i + 1][k] * t));
 }
 
+/* sRGB transfer curve (IEC 61966-2-1) of a linear value clamped to [0, 1]. */
+static uint8_t encode_srgb(double linear)
+{
+    if (!(linear > 0))
+        return 0;
+    if (linear >= 1)
+        return 255;
+    double e = linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1 / 2.4) - 0.055;
+    return (uint8_t)lrint(255.0 * e);
+}
+
+static int options_ok(const sc_render_options *o, const sc_bvh *bvh)
+{
+    if ((unsigned)o->debug >= SC_RENDER_DEBUG_COUNT || o->ao_samples < 0 || o->ao_samples > 4096 ||
+        o->threads < 0 || (unsigned)o->integrator >= SC_RENDER_INTEGRATOR_COUNT)
+        return 0;
+    if (!bvh && (!o->backend || o->debug == SC_RENDER_HEAT || o->trace_stats))
+        return 0;
+    if (o->backend && (!o->backend->closest || !o->backend->occluded || o->debug == SC_RENDER_HEAT))
+        return 0;
+    if (o->integrator == SC_RENDER_PATH &&
+        (o->spp < 1 || o->spp > 65536 || o->bounces < 0 || o->bounces > 64 || o->rr_depth < 1 ||
+         !(fabs(o->exposure) <= 64) || o->debug != SC_RENDER_SHADED))
+        return 0;
+    return 1;
+}
+
 sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_options *opt,
                     sc_image *out, sc_render_stats *stats)
 {
-    if (!v || !bvh || !out || !sc_mesh_layout_ok(&v->mesh) || (v->mesh.triangle_count && (!v->mesh.positions || !v->mesh.indices || !v->mesh_ids)) ||
+    if (!v || !out || !sc_mesh_layout_ok(&v->mesh) ||
+        (v->mesh.triangle_count && (!v->mesh.positions || !v->mesh.indices || !v->mesh_ids)) ||
         (v->num_meshes && !v->mesh_colors) || (v->num_lights && !v->lights))
         return SC_ERR_INVALID_ARGUMENT;
     sc_render_options defaults;
@@ -241,19 +314,17 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
         sc_render_options_init(&defaults);
         opt = &defaults;
     }
-    if ((unsigned)opt->debug >= SC_RENDER_DEBUG_COUNT || opt->ao_samples < 0 ||
-        opt->ao_samples > 4096 || opt->threads < 0)
+    if (!options_ok(opt, bvh))
         return SC_ERR_INVALID_ARGUMENT;
-    ctx c = { .v = v, .bvh = bvh, .o = opt };
-    if (sc_camera_frame_make(&v->camera, &c.frame) != SC_OK)
+    ctx c = { .r = { .v = v, .bvh = bvh, .o = opt } };
+    sc_render_ctx *rc = &c.r;
+    if (sc_camera_frame_make(&v->camera, &rc->frame) != SC_OK)
         return SC_ERR_INVALID_ARGUMENT;
     for (size_t t = 0; t < v->mesh.triangle_count; t++)
         if (v->mesh_ids[t] >= v->num_meshes)
             return SC_ERR_INVALID_ARGUMENT;
     const int w = v->camera.width, h = v->camera.height;
-    sc_status st = sc_image_alloc(out, w, h);
-    if (st != SC_OK)
-        return st;
+    const int path = opt->integrator == SC_RENDER_PATH;
 
     /* Offsets scale with the scene: 1e-4 of the diagonal, as the shared ray
      * sets do (sc_rays.h), and never below float resolution at the hit. */
@@ -273,25 +344,35 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
         }
     }
     diag = sqrt(diag);
-    c.eps = fmax(1e-4 * diag, 4e-7 * mag);
-    if (!(c.eps > 0))
-        c.eps = 1e-6;
-    c.ao_len = 0.2 * diag;
-    c.collect = opt->trace_stats || opt->debug == SC_RENDER_HEAT;
+    rc->eps = fmax(1e-4 * diag, 4e-7 * mag);
+    if (!(rc->eps > 0))
+        rc->eps = 1e-6;
+    rc->ao_len = 0.2 * diag;
+    rc->collect = !opt->backend && (opt->trace_stats || opt->debug == SC_RENDER_HEAT);
 
+    sc_status st = path ? sc_path_prepare(rc) : SC_OK;
+    if (st != SC_OK)
+        return st;
+    st = sc_image_alloc(out, w, h);
+    if (st != SC_OK) {
+        sc_path_release(rc);
+        return st;
+    }
     size_t npx = (size_t)w * (size_t)h;
     c.accum = malloc(npx * 3 * sizeof(float));
     c.value = malloc(npx * sizeof(float));
     if (!c.accum || !c.value) {
         free(c.accum);
         free(c.value);
+        sc_path_release(rc);
         sc_image_free(out);
         return SC_ERR_OUT_OF_MEMORY;
     }
     const int tx = (w + TILE - 1) / TILE, ty = (h + TILE - 1) / TILE, ntiles = tx * ty;
     sc_render_stats total;
     memset(&total, 0, sizeof total);
-    int done = 0;
+    int done = 0, failed = 0, cancelled = 0;
+    uint64_t rays_done = 0;
     double t0 = sc_now_seconds();
 #ifdef _OPENMP
     int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
@@ -300,18 +381,46 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
     {
         sc_render_stats local;
         memset(&local, 0, sizeof local);
+        sc_path_work *work = path ? sc_path_work_new() : NULL;
+        if (path && !work) {
+#ifdef _OPENMP
+#pragma omp atomic write
+#endif
+            failed = 1;
+        }
 #ifdef _OPENMP
 #pragma omp for schedule(dynamic, 1)
 #endif
         for (int tile = 0; tile < ntiles; tile++) {
+            int stop;
+#ifdef _OPENMP
+#pragma omp atomic read
+#endif
+            stop = failed;
+            if (opt->cancel && *opt->cancel)
+                stop = cancelled = 1;   /* every thread writes the same value */
+            if (stop)
+                continue;   /* an OpenMP loop cannot break: the rest are skipped */
+            uint64_t before = local.primary_rays + local.shadow_rays + local.ao_rays + local.bounce_rays;
             int x0 = (tile % tx) * TILE, y0 = (tile / tx) * TILE;
-            for (int y = y0; y < y0 + TILE && y < h; y++)
-                for (int x = x0; x < x0 + TILE && x < w; x++) {
-                    size_t i = (size_t)y * (size_t)w + (size_t)x;
-                    c.value[i] = -1;
-                    shade_pixel(&c, x, y, c.accum + 3 * i, c.value + i, &local);
-                }
+            int x1 = x0 + TILE < w ? x0 + TILE : w, y1 = y0 + TILE < h ? y0 + TILE : h;
+            if (path) {
+                sc_path_tile(rc, work, x0, y0, x1, y1, c.accum, opt->edge, &local);
+            } else {
+                for (int y = y0; y < y1; y++)
+                    for (int x = x0; x < x1; x++) {
+                        size_t i = (size_t)y * (size_t)w + (size_t)x;
+                        c.value[i] = -1;
+                        shade_pixel(rc, x, y, c.accum + 3 * i, c.value + i, &local);
+                    }
+            }
+            uint64_t traced = local.primary_rays + local.shadow_rays + local.ao_rays + local.bounce_rays - before;
+            uint64_t r;
             int d;
+#ifdef _OPENMP
+#pragma omp atomic capture
+#endif
+            r = rays_done += traced;
 #ifdef _OPENMP
 #pragma omp atomic capture
 #endif
@@ -321,8 +430,9 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
 #else
             if (opt->progress)
 #endif
-                opt->progress(opt->progress_ctx, (double)d / ntiles);
+                opt->progress(opt->progress_ctx, (double)d / ntiles, r);
         }
+        sc_path_work_free(work);
 #ifdef _OPENMP
 #pragma omp critical(sc_render_stats)
 #endif
@@ -330,12 +440,26 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
             total.primary_rays += local.primary_rays;
             total.shadow_rays += local.shadow_rays;
             total.ao_rays += local.ao_rays;
+            total.bounce_rays += local.bounce_rays;
             add_stats(&total.trace, &local.trace);
         }
     }
     total.seconds = sc_now_seconds() - t0;
+    sc_path_release(rc);
+    if (failed || cancelled) {
+        free(c.accum);
+        free(c.value);
+        sc_image_free(out);
+        return failed ? SC_ERR_OUT_OF_MEMORY : SC_ERR_CANCELLED;
+    }
 
-    if (opt->debug == SC_RENDER_DEPTH || opt->debug == SC_RENDER_HEAT) {
+    if (path) {
+        double scale = exp2(opt->exposure);
+        for (size_t i = 0; i < 3 * npx; i++)
+            out->rgb[i] = encode_srgb(scale * c.accum[i]);
+        if (opt->radiance)
+            memcpy(opt->radiance, c.accum, npx * 3 * sizeof(float));
+    } else if (opt->debug == SC_RENDER_DEPTH || opt->debug == SC_RENDER_HEAT) {
         double vmin = INFINITY, vmax = -INFINITY;
         for (size_t i = 0; i < npx; i++)
             if (c.value[i] >= 0) {
