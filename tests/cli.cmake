@@ -6,3 +6,8 @@ if(TARGET spherecull_cli)
   add_test(NAME cli_options
            COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/cli_options.sh $<TARGET_FILE:spherecull_cli> ${PROJECT_VERSION})
 endif()
+if(TARGET spherecull_cli)
+  add_test(NAME cli_render
+           COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/cli_render.sh $<TARGET_FILE:spherecull_cli>
+                   ${PROJECT_SOURCE_DIR}/scenes/cornell.json)
+endif()

@@ -16,7 +16,7 @@ no() { echo "FAIL  $*"; fail=1; }
 
 [ "$("$S" --version)" = "spherecull $V" ] || no "--version does not print 'spherecull $V'"
 
-for c in accuracy bench bench-spheres compare raster raster-check render; do
+for c in accuracy bench bench-render bench-spheres compare raster raster-check render; do
   "$S" help "$c" > help.txt || no "help $c: exit status $?"
   "$S" "$c" --help > dash.txt || no "$c --help: exit status $?"
   cmp -s help.txt dash.txt || no "help $c differs from $c --help"

@@ -1,6 +1,7 @@
 /* Parsing, help, errors and output files for every command (see cli.h). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <math.h>
 #include <getopt.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -161,6 +162,38 @@ int sc_cli_int(const char *cmd, const char *opt, const char *s, long lo, long hi
         return -1;
     }
     *out = v;
+    return 0;
+}
+
+int sc_cli_double(const char *cmd, const char *opt, const char *s, double lo, double hi, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = s && *s ? strtod(s, &end) : 0;
+    if (!s || !*s || errno || *end || !isfinite(v) || v < lo || v > hi) {
+        sc_cli_error(cmd, "--%s wants a number in [%g, %g], not '%s'", opt, lo, hi, s ? s : "");
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+int sc_cli_vec3(const char *cmd, const char *opt, const char *s, double lim, double out[3])
+{
+    const char *p = s ? s : "";
+    int ok = 1;
+    for (int i = 0; ok && i < 3; i++) {
+        char *end;
+        errno = 0;
+        double v = strtod(p, &end);
+        ok = end != p && !errno && isfinite(v) && fabs(v) <= lim && *end == (i < 2 ? ',' : '\0');
+        out[i] = v;
+        p = end + (i < 2);
+    }
+    if (!ok) {
+        sc_cli_error(cmd, "--%s wants X,Y,Z (three numbers, |x| <= %g), not '%s'", opt, lim, s ? s : "");
+        return -1;
+    }
     return 0;
 }
 

@@ -28,7 +28,7 @@ typedef struct sc_cli_cmd {
     int (*run)(int argc, char **argv);   /* argv[0] is the command name */
 } sc_cli_cmd;
 
-extern const sc_cli_cmd sc_cli_accuracy, sc_cli_bench, sc_cli_bench_spheres, sc_cli_compare, sc_cli_raster,
+extern const sc_cli_cmd sc_cli_accuracy, sc_cli_bench, sc_cli_bench_render, sc_cli_bench_spheres, sc_cli_compare, sc_cli_raster,
     sc_cli_raster_check, sc_cli_render;
 
 /* Called per option (index into cmd->opts; val NULL for flags) and per
@@ -75,6 +75,9 @@ int sc_cli_int(const char *cmd, const char *opt, const char *s, long lo, long hi
 int sc_cli_isa(const char *cmd, const char *s);
 #define SC_CLI_ISA_VALUES "auto|scalar|sse4|avx2|avx512"
 int sc_cli_u64(const char *cmd, const char *opt, const char *s, unsigned long long *out);
+/* A finite number in [lo, hi]; "X,Y,Z", three finite numbers of magnitude at most lim. */
+int sc_cli_double(const char *cmd, const char *opt, const char *s, double lo, double hi, double *out);
+int sc_cli_vec3(const char *cmd, const char *opt, const char *s, double lim, double out[3]);
 /* A comma list of integers in [lo, hi], at most max; returns the count or -1. */
 int sc_cli_int_list(const char *cmd, const char *opt, const char *s, int lo, int hi, int *out, int max);
 

@@ -8,7 +8,7 @@
 #include "cli.h"
 
 static const sc_cli_cmd *const commands[] = {
-    &sc_cli_accuracy, &sc_cli_bench, &sc_cli_bench_spheres, &sc_cli_compare,
+    &sc_cli_accuracy, &sc_cli_bench, &sc_cli_bench_render, &sc_cli_bench_spheres, &sc_cli_compare,
     &sc_cli_raster, &sc_cli_raster_check, &sc_cli_render,
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };

@@ -12,6 +12,7 @@
 
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_rays.h"
+#include "spherecull/sc_render.h"
 #include "spherecull/sc_scene.h"
 
 enum { SC_TRACER_MAX_THREADS = 256 };
@@ -74,6 +75,16 @@ sc_status sc_tracer_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hit
  * gets the wall time. */
 sc_status sc_tracer_run_threads(const sc_tracer *t, const sc_ray *rays, size_t n, sc_hitrec *hits,
                                 uint8_t *occ, int threads, double *seconds);
+
+/* The renderer's back end over t (our BVH or Embree, any table mode):
+ * batches run on the calling render thread through sc_tracer_run, Embree's
+ * stream flag following the batch's coherence, MXCSR FTZ|DAZ while t runs
+ * when t->ftz. b->backend is valid while b and t's handle live. */
+typedef struct sc_tracer_backend {
+    sc_render_backend backend;
+    sc_tracer coherent, incoherent;
+} sc_tracer_backend;
+void sc_tracer_render_backend(const sc_tracer *t, sc_tracer_backend *b);
 
 /* Same primitive, or (an edge or a tie) the same distance within rel. */
 int sc_same_hit(const sc_hitrec *a, const sc_hitrec *b, float rel);
