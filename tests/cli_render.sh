@@ -57,11 +57,14 @@ one_line --eye 0.5,0.5,0 --target 0.5,0.5,0
 # frame equal to ours away from edges.
 "$S" bench-render -q 2>/dev/null; [ $? -eq 2 ] || no "bench-render -q (unknown option): exit status not 2"
 if "$S" compare --help | grep -q 'embree'; then
-  "$S" bench-render "$C" --width 48 --spp 2 --repeats 1 --threads 1 --tracers spherecull,embree-robust \
-      --csv b.csv --images . > b.txt || no "bench-render: exit status $?"
-  [ "$(wc -l < b.csv)" -eq 3 ] || no "bench-render CSV: $(wc -l < b.csv) lines, wanted 3"
+  # The shipped scenes that need no download: no pixel away from edges may
+  # differ between our frame and the watertight Embree's.
+  "$S" bench-render "$C" "$(dirname "$C")/spheres.json" --width 64 --spp 2 --repeats 1 --threads 2 \
+      --tracers spherecull,embree-robust --csv b.csv --images . > b.txt || no "bench-render: exit status $?"
+  [ "$(wc -l < b.csv)" -eq 5 ] || no "bench-render CSV: $(wc -l < b.csv) lines, wanted 5"
   head -n 1 b.csv | grep -q '^scene,.*,differ_elsewhere,' || no "bench-render CSV header"
-  awk -F, 'NR == 3 && $18 != 0 { exit 1 }' b.csv || no "embree-robust's frame differs from ours away from edges"
+  awk -F, '$8 == "embree-robust" { n++; if ($18 != 0) bad = 1 } END { exit (n == 2 && !bad) ? 0 : 1 }' b.csv ||
+    no "embree-robust's frame differs from ours away from edges: $(cat b.csv)"
   [ -s cornell_json-spherecull.png ] && [ -s cornell_json-embree-robust.png ] || no "bench-render --images wrote no frames"
 fi
 for bad in "--spp 0" "--tracers nope" "--threads 0" "--repeats 0"; do

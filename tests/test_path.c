@@ -257,6 +257,25 @@ static void test_deterministic(void **state)
         assert_memory_equal(img[0].rgb, img[r].rgb, n);
         assert_memory_equal(rad[0], rad[r], n * sizeof(float));
     }
+    /* Asking for the edge mask (shadow rays as closest-hit queries) changes
+     * no pixel. */
+    {
+        sc_render_options o;
+        path_options(&o, 4, 4);
+        uint8_t *edge = calloc(n / 3, 1);
+        assert_non_null(edge);
+        o.edge = edge;
+        sc_image e = { 0 };
+        float *re = render_radiance(s, bvh, &o, &e);
+        assert_memory_equal(re, rad[0], n * sizeof(float));
+        size_t marked = 0;
+        for (size_t i = 0; i < n / 3; i++)
+            marked += edge[i];
+        assert_true(marked < n / 3 / 2);
+        free(edge);
+        free(re);
+        sc_image_free(&e);
+    }
     /* Something was lit, and the seed matters. */
     double sum = 0;
     for (size_t i = 0; i < n; i++)

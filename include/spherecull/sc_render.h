@@ -110,7 +110,9 @@ typedef struct sc_render_options {
      * radiance the mean linear radiance per pixel, 3 floats; edge 1 where a
      * hit of some path of the pixel had a barycentric coordinate below
      * SC_RENDER_EDGE_BARY (a back end may legitimately report the
-     * neighbouring triangle there), else 0. */
+     * neighbouring triangle there, or miss an open edge), else 0. With edge
+     * the shadow rays are traced as closest-hit queries, so their nearest
+     * blockers count too: the same image, more time. */
     float *radiance;
     uint8_t *edge;
 } sc_render_options;

@@ -249,6 +249,47 @@ static double sample_cosine(sc_rng *r, const double n[3], double out[3])
     return z;
 }
 
+/* The hit point from the primitive alone, in double on the ray as traced:
+ * the back end's t and barycentrics differ in the last bits between back
+ * ends, its choice of triangle does not (away from edges). Writes the
+ * unnormalised normal (V1 - V0) x (V2 - V0), the point and its t; returns 1
+ * if the point lies within SC_RENDER_EDGE_BARY of an edge (or the triangle
+ * is degenerate). */
+static int locate_hit(const sc_scene_view *v, const sc_hitrec *h, const sc_ray *r, double ng[3], double x[3],
+                      double *t_out)
+{
+    double a[3], b[3], cc[3], e0[3], e1[3], ro[3], rd[3];
+    tri_vertices(v, h->prim, a, b, cc);
+    for (int k = 0; k < 3; k++) {
+        e0[k] = b[k] - a[k];
+        e1[k] = cc[k] - a[k];
+        ro[k] = r->org[k];
+        rd[k] = r->dir[k];
+    }
+    cross3(e0, e1, ng);
+    double nn = dot3(ng, ng), den = dot3(ng, rd), t = h->t;
+    if (nn > 0 && den != 0) {
+        double ao[3] = { a[0] - ro[0], a[1] - ro[1], a[2] - ro[2] };
+        t = dot3(ng, ao) / den;
+    }
+    for (int k = 0; k < 3; k++)
+        x[k] = ro[k] + t * rd[k];
+    *t_out = t;
+    if (!(nn > 0))
+        return 1;
+    double pa[3], pb[3], pc[3], q[3];
+    for (int k = 0; k < 3; k++) {
+        pa[k] = a[k] - x[k];
+        pb[k] = b[k] - x[k];
+        pc[k] = cc[k] - x[k];
+    }
+    cross3(pb, pc, q);
+    double l0 = dot3(ng, q) / nn;
+    cross3(pc, pa, q);
+    double l1 = dot3(ng, q) / nn, l2 = 1 - l0 - l1;
+    return fmin(l0, fmin(l1, l2)) < SC_RENDER_EDGE_BARY;
+}
+
 static uint64_t stream_seed(uint64_t seed, uint64_t pixel, uint64_t sample)
 {
     uint64_t x = seed;
@@ -343,42 +384,10 @@ void sc_path_tile(const sc_render_ctx *c, sc_path_work *w, int x0, int y0, int x
                         sum[k] += p->thr[k] * v->background[k];
                     continue;
                 }
-                /* The hit point from the primitive alone, in double on the
-                 * ray as traced: the back end's t and barycentrics differ
-                 * in the last bits between back ends, its choice of
-                 * triangle does not (away from edges). */
-                double a[3], b[3], cc[3], e0[3], e1[3], ng[3], ro[3], rd[3], x[3];
-                tri_vertices(v, h->prim, a, b, cc);
-                for (int k = 0; k < 3; k++) {
-                    e0[k] = b[k] - a[k];
-                    e1[k] = cc[k] - a[k];
-                    ro[k] = r->org[k];
-                    rd[k] = r->dir[k];
-                }
-                cross3(e0, e1, ng);
-                double nn = dot3(ng, ng), den = dot3(ng, rd), t = h->t;
-                if (nn > 0 && den != 0) {
-                    double ao[3] = { a[0] - ro[0], a[1] - ro[1], a[2] - ro[2] };
-                    t = dot3(ng, ao) / den;
-                }
-                for (int k = 0; k < 3; k++)
-                    x[k] = ro[k] + t * rd[k];
-                if (nn > 0) {
-                    double pb[3], pc[3], pa[3], q[3];
-                    for (int k = 0; k < 3; k++) {
-                        pa[k] = a[k] - x[k];
-                        pb[k] = b[k] - x[k];
-                        pc[k] = cc[k] - x[k];
-                    }
-                    cross3(pb, pc, q);
-                    double l0 = dot3(ng, q) / nn;
-                    cross3(pc, pa, q);
-                    double l1 = dot3(ng, q) / nn, l2 = 1 - l0 - l1;
-                    if (fmin(l0, fmin(l1, l2)) < SC_RENDER_EDGE_BARY)
-                        w->edge[p->pixel] = 1;
-                } else {
+                double ng[3], x[3], t;
+                if (locate_hit(v, h, r, ng, x, &t))
                     w->edge[p->pixel] = 1;
-                }
+                double nn = dot3(ng, ng), rd[3] = { r->dir[0], r->dir[1], r->dir[2] };
                 double nrm[3], nl = sqrt(nn);
                 for (int k = 0; k < 3; k++)
                     nrm[k] = nl > 0 ? ng[k] / nl : -p->d[k];
@@ -432,7 +441,24 @@ void sc_path_tile(const sc_render_ctx *c, sc_path_work *w, int x0, int y0, int x
             if (ns) {
                 st->shadow_rays += (uint64_t)ns;
                 memset(w->occluded, 1, (size_t)ns);   /* a refused shadow ray: no light */
-                (void)sc_render_occluded(c, w->shadow_rays, (size_t)ns, w->occluded, 0, ts);
+                if (edge) {
+                    /* Asked where paths pass near edges: the shadow rays
+                     * find their nearest blocker, so a blocker hit near an
+                     * edge (where a back end may legitimately miss it)
+                     * marks the pixel. Same answer as the any-hit query. */
+                    for (int j = 0; j < ns; j++)
+                        w->hits[j].prim = SC_HITREC_MISS;
+                    (void)sc_render_closest(c, w->shadow_rays, (size_t)ns, w->hits, 0, ts);
+                    for (int j = 0; j < ns; j++) {
+                        const sc_hitrec *h = &w->hits[j];
+                        w->occluded[j] = h->prim != SC_HITREC_MISS;
+                        double ng[3], x[3], t;
+                        if (h->prim < v->mesh.triangle_count && locate_hit(v, h, &w->shadow_rays[j], ng, x, &t))
+                            w->edge[w->shadows[j].pixel] = 1;
+                    }
+                } else {
+                    (void)sc_render_occluded(c, w->shadow_rays, (size_t)ns, w->occluded, 0, ts);
+                }
                 for (int j = 0; j < ns; j++)
                     if (!w->occluded[j])
                         for (int k = 0; k < 3; k++)
