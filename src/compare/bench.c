@@ -8,6 +8,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include "common/sc_median.h"
 #include "bench.h"
 #include "common/sc_clock.h"
 #include "spherecull/sc_trace.h"
@@ -53,18 +54,6 @@ static uint64_t cycles_read(int fd)
     if (fd < 0 || read(fd, &v, sizeof v) != (ssize_t)sizeof v)
         return 0;
     return v;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /* Everything one scene's measurements share. */
@@ -221,10 +210,10 @@ static void time_pairs(bench_ctx *c, const sc_tracer *t, int kind, const sc_rays
         cratio[i] = co ? (double)ce / (double)co : NAN;
     }
     r->threads = thr;
-    r->mrays = (double)rs->count / median(t_o, reps) * 1e-6;
-    r->embree_mrays = (double)rs->count / median(t_e, reps) * 1e-6;
-    r->ratio = median(ratio, reps);
-    r->cycle_ratio = thr == 1 && fd >= 0 ? median(cratio, reps) : NAN;
+    r->mrays = (double)rs->count / sc_median(t_o, reps) * 1e-6;
+    r->embree_mrays = (double)rs->count / sc_median(t_e, reps) * 1e-6;
+    r->ratio = sc_median(ratio, reps);
+    r->cycle_ratio = thr == 1 && fd >= 0 ? sc_median(cratio, reps) : NAN;
 }
 
 /* One BVH configuration: checked, then timed per ray kind and thread count. */

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/sc_median.h"
 #include "bench_render.h"
 #include "common/sc_clock.h"
 
@@ -39,18 +40,6 @@ static sc_status fail(char *err, size_t n, sc_status st, const char *fmt, ...)
         va_end(ap);
     }
     return st;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 typedef struct side {
@@ -205,7 +194,7 @@ sc_status sc_bench_render_run(const sc_scene_view *v, const sc_bench_render_opti
             if (!sides[t].embree)
                 continue;
             memcpy(tmp, sides[t].times, (size_t)o->repeats * sizeof *tmp);
-            double m = median(tmp, o->repeats);
+            double m = sc_median(tmp, o->repeats);
             if (m < best_median)
                 best_median = m, best = t;
         }
@@ -217,14 +206,14 @@ sc_status sc_bench_render_run(const sc_scene_view *v, const sc_bench_render_opti
             row.threads = threads;
             row.build_s = s->build_s;
             memcpy(tmp, s->times, (size_t)o->repeats * sizeof *tmp);
-            row.frame_s = median(tmp, o->repeats);
+            row.frame_s = sc_median(tmp, o->repeats);
             row.rays = s->rays;
             row.mrays = row.frame_s > 0 ? (double)s->rays * 1e-6 / row.frame_s : NAN;
             row.x_best_embree = NAN;
             if (t == 0 && best > 0) {
                 for (int r = 0; r < o->repeats; r++)
                     tmp[r] = sides[best].times[r] / s->times[r];
-                row.x_best_embree = median(tmp, o->repeats);
+                row.x_best_embree = sc_median(tmp, o->repeats);
                 row.best_embree = sides[best].name;
             }
             row.pixels = npx;

@@ -6,18 +6,13 @@
 
 #include <cjson/cJSON.h>
 
+#include "common/sc_median.h"
 #include "common/sc_clock.h"
 #include "common/sc_csv.h"
 #include "compare.h"
 #include "crossing.h"
 #include "oracle.h"
 #include "tracer.h"
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 /* ---- rows ----------------------------------------------------------------- */
 
@@ -117,7 +112,7 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
     }
     a->t_med = a->t_max = NAN;
     if (terr && nt) {
-        qsort(terr, nt, sizeof *terr, cmp_double);
+        qsort(terr, nt, sizeof *terr, sc_cmp_double);
         a->t_med = terr[nt / 2];
         a->t_max = terr[nt - 1];
     }
@@ -280,7 +275,7 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
             }
             times[i] = sum / loops;
         }
-        qsort(times, (size_t)reps, sizeof times[0], cmp_double);
+        qsort(times, (size_t)reps, sizeof times[0], sc_cmp_double);
         sc_cmp_row *row = row_add(out);
         if (!row)
             return SC_ERR_OUT_OF_MEMORY;

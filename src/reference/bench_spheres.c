@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/sc_median.h"
 #include "common/sc_clock.h"
 #include "common/sc_rng.h"
 #include "sc_bench_spheres.h"
@@ -20,20 +21,6 @@
         if (note)                                                                                                  \
             note(ctx, line_);                                                                                      \
     } while (0)
-
-
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* One timed batch, for the median-of-repeats helper. */
 typedef struct job {
@@ -296,7 +283,7 @@ static void measure_error(const errset *e, const sc_kernels *k, int dbl, int met
             continue;
         errs[m++] = sc_ref_centre_error(ref, c);
     }
-    *med = m ? median(errs, m) : NAN;
+    *med = m ? sc_median(errs, m) : NAN;
     *mx = m ? errs[m - 1] : NAN;
     free(fin), free(din), free(of), free(od), free(errs);
 }
@@ -348,7 +335,7 @@ static double time_reject(const sc_kernels *k, int width, int packet, int quick)
     }
     (void)sink;
     free(blk), free(pk);
-    return median(t, reps);
+    return sc_median(t, reps);
 }
 
 const sc_bsph_row *sc_bsph_find(const sc_bsph_report *b, int method, int kind, int isa, int dbl, const char *ws, const char *src)
