@@ -69,7 +69,7 @@ sed -n 2p c.csv | grep -q '^"a,b.obj",4,primary,spherecull-off,' || no "compare 
 
 # the yardstick in every compare row: the Embree it loaded, the faster of
 # Embree's medium and high builds (checked here from the rows themselves),
-# the MXCSR mode and the loops per timed run
+# the MXCSR mode, the loops per timed run and the build time
 if "$S" compare --help | grep -q 'embree-high'; then
   cp 'a,b.obj' tet.obj      # no comma in the scene field: the checks below split on commas
   "$S" compare tet.obj --repeats 1 --count 64 --oracle-rays 0 --width 16 --rays primary,random \
@@ -94,6 +94,7 @@ if "$S" compare --help | grep -q 'embree-high'; then
                if (f[c["best_embree"]] > f[c["speed_vs_embree"]] + 0.0006) { print "best_embree " f[c["best_embree"]] " above speed_vs_embree " f[c["speed_vs_embree"]]; bad = 1 }
                if (f[c["embree_build"]] !~ /libembree3/) { print "embree_build " f[c["embree_build"]]; bad = 1 }
                if (f[c["mxcsr"]] != "ftz" || f[c["loops"]] < 1) { print "mxcsr/loops " f[c["mxcsr"]] " " f[c["loops"]]; bad = 1 }
+               if (!(f[c["build_s"]] > 0)) { print "build_s " f[c["build_s"]]; bad = 1 }
                n++
              }
              if (n != 2) { print n " spherecull-off rows"; bad = 1 }

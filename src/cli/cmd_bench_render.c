@@ -148,7 +148,9 @@ static void print_row(void *ctx, const sc_bench_render_row *r)
     char diff[64] = "reference";
     if (r->differ_edge || r->differ_elsewhere || strcmp(r->tracer, p->a->o.tracers[0]))
         snprintf(diff, sizeof diff, "%zu / %zu", r->differ_elsewhere, r->differ_edge);
-    printf("%-26.26s %3d  %-14s %8.3f %9.3f %8.2f  %-22s %-14s %6.2f%%\n", p->spec, r->threads, r->tracer,
+    /* The table shows the file name; the CSV has the whole spec. */
+    const char *shown = strrchr(p->spec, '/') ? strrchr(p->spec, '/') + 1 : p->spec;
+    printf("%-26.26s %3d  %-14s %8.3f %9.3f %8.2f  %-22s %-14s %6.2f%%\n", shown, r->threads, r->tracer,
            r->build_s, r->frame_s, r->mrays, ratio, diff, 100.0 * (double)r->edge_pixels / (double)r->pixels);
     fflush(stdout);
     sc_csv_str(p->csv, p->spec);

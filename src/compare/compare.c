@@ -303,6 +303,7 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
         row->t_err_median = acc->t_med;
         row->t_err_max = acc->t_max;
         row->bytes_per_tri = t->bytes_per_tri;
+        row->build_s = t->build_seconds;
         row->has_prefilter_stats = t->prefilter;
         double nr = ctr->rays ? (double)ctr->rays : 1;
         row->sphere_tests_per_ray = t->prefilter ? (double)ctr->sphere_tests / nr : NAN;
@@ -447,7 +448,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
                "primid_disagree,t_err_max,holes,sphere_tests_per_ray,sphere_reject_rate,"
                "false_positive_rate,tri_tests_per_ray,bytes_per_tri,"
                "nrays,closed,t_err_median,hole_rays,speed_vs_embree,grazes_missed,graze_rays,"
-               "best_embree,best_embree_tracer,embree_build,mxcsr,loops\n");
+               "best_embree,best_embree_tracer,embree_build,mxcsr,loops,build_s\n");
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
         char a[32], b[32], c[32], d[32], e[32], g[32], h[32], be[32];
@@ -471,7 +472,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         sc_csv_str(f, r->best_embree_tracer);
         fputc(',', f);
         sc_csv_str(f, r->embree_build);
-        fprintf(f, ",%s,%d\n", r->ftz ? "ftz" : "default", r->loops);
+        fprintf(f, ",%s,%d,%.6g\n", r->ftz ? "ftz" : "default", r->loops, r->build_s);
     }
     return ferror(f) ? -1 : 0;
 }
@@ -524,6 +525,7 @@ int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f)
         json_num(o, "false_positive_rate", r->false_positive_rate);
         json_num(o, "tri_tests_per_ray", r->tri_tests_per_ray);
         cJSON_AddNumberToObject(o, "bytes_per_tri", r->bytes_per_tri);
+        cJSON_AddNumberToObject(o, "build_s", r->build_s);
         cJSON_AddItemToArray(arr, o);
     }
     char *s = cJSON_Print(root);

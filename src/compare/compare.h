@@ -57,6 +57,7 @@ typedef struct sc_cmp_row {
     double t_err_median, t_err_max;
     double sphere_tests_per_ray, sphere_reject_rate, false_positive_rate, tri_tests_per_ray;
     double bytes_per_tri;
+    double build_s;                     /* the tracer's build on every CPU, seconds */
     int has_prefilter_stats;
 } sc_cmp_row;
 

@@ -78,6 +78,7 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
     sc_bvh_info info;
     sc_bvh_get_info(b, &info);
     t->handle = b;
+    t->build_seconds = info.build_seconds;
     t->bytes_per_tri = m->triangle_count ? (double)info.total_bytes / m->triangle_count : 0;
     t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
     t->counted = 1;
@@ -87,7 +88,18 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
     return SC_OK;
 }
 
+static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm);
+
 sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm)
+{
+    double t0 = sc_now_seconds();
+    sc_status st = tracer_build(t, def, cm);
+    if (st == SC_OK)
+        t->build_seconds = sc_now_seconds() - t0;
+    return st;
+}
+
+static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm)
 {
     if (!t || !def || !cm)
         return SC_ERR_INVALID_ARGUMENT;

@@ -41,6 +41,7 @@ typedef struct sc_tracer {
     sc_tracer_def def;
     void *handle;            /* sc_bvh * or sc_embree * */
     double bytes_per_tri;    /* everything the tracer holds, its mesh copy included */
+    double build_seconds;    /* wall time of sc_tracer_build / sc_tracer_build_bvh */
     int prefilter;           /* reports sphere tests */
     int counted;             /* reports triangle tests */
     int fp_exact;            /* false positives are counted exactly */
