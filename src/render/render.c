@@ -397,8 +397,13 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
 #pragma omp atomic read
 #endif
             stop = failed;
-            if (opt->cancel && *opt->cancel)
-                stop = cancelled = 1;   /* every thread writes the same value */
+            if (opt->cancel && *opt->cancel) {
+                stop = 1;
+#ifdef _OPENMP
+#pragma omp atomic write
+#endif
+                cancelled = 1;
+            }
             if (stop)
                 continue;   /* an OpenMP loop cannot break: the rest are skipped */
             uint64_t before = local.primary_rays + local.shadow_rays + local.ao_rays + local.bounce_rays;
