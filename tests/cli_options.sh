@@ -51,6 +51,14 @@ if grep -q '^# embree: 3' pk.txt; then
 fi
 grep -q '^primary .* circum ' pk.txt || no "bench --packet 16 printed no circum row"
 
+# bench times diffuse and random rays too (closest hit; checked against brute force first)
+"$S" bench proc:sphere:2000 --rays diffuse,random --count 500 --repeats 1 --size 32x32 --threads 1 --leaf 4 \
+  --prefilter off > dr.txt || no "bench --rays diffuse,random: exit status $?"
+grep -q '^diffuse .* off ' dr.txt || no "bench --rays diffuse,random printed no diffuse row"
+grep -q '^random .* off ' dr.txt || no "bench --rays diffuse,random printed no random row"
+grep -q ' 500 random rays ' dr.txt || no "bench --count 500 did not make 500 random rays"
+one_line 2 bench proc:sphere:200 --rays primary,bogus
+
 # --opt=value and -- (an operand after -- is never an option)
 "$S" accuracy --n=3 --seed=2 > acc.txt || no "accuracy --n=3 --seed=2: exit status $?"
 grep -q '3 triangles per family, seed 2' acc.txt || no "accuracy --n=3 --seed=2 did not take the values"

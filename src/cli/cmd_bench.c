@@ -29,14 +29,17 @@
  * yardstick, printed and written in every CSV row. */
 static char embree_build[128];
 
-static const sc_name ray_kinds[] = { { "primary", SC_BENCH_PRIMARY }, { "shadow", SC_BENCH_SHADOW } };
+static const sc_name ray_kinds[] = { { "primary", SC_BENCH_PRIMARY },
+                                     { "shadow", SC_BENCH_SHADOW },
+                                     { "diffuse", SC_BENCH_DIFFUSE },
+                                     { "random", SC_BENCH_RANDOM } };
 static const sc_name embree_modes[] = { { "default", 0 }, { "robust", 1 } };
 
 enum { O_CSV, O_RAYS, O_THREADS, O_LEAF, O_PREFILTER, O_SIZE, O_REPEATS, O_ISA, O_EMBREE, O_TRIANGLE, O_TRAV,
-       O_PACKET };
+       O_PACKET, O_COUNT };
 static const sc_cli_opt opts[] = {
     [O_CSV] = { "csv", 0, "FILE", "also write one row per measurement", NULL },
-    [O_RAYS] = { "rays", 0, "LIST", "primary,shadow", "both" },
+    [O_RAYS] = { "rays", 0, "LIST", "primary,shadow,diffuse,random", "primary,shadow" },
     [O_THREADS] = { "threads", 0, "LIST", "thread counts, e.g. 1,2", "1,2" },
     [O_LEAF] = { "leaf", 0, "LIST", "leaf sizes 1..16", "4,8,16" },
     [O_PREFILTER] = { "prefilter", 0, "LIST", "off,circum,minimal,auto", "all" },
@@ -49,6 +52,7 @@ static const sc_cli_opt opts[] = {
                  "the builder's, sc_bvh_config_default" },
     [O_PACKET] = { "packet", 0, "W", "0: single rays; 8 or 16: packets of consecutive rays (4x4 pixel tiles), "
                    "against Embree's packets of the same width", "0" },
+    [O_COUNT] = { "count", 0, "N", "random rays per scene", "65536" },
 };
 
 typedef struct args {
@@ -78,7 +82,7 @@ static int parse_modes(const char *s, int *out)
 static int parse_kinds(const char *s, sc_bench_options *o)
 {
     char buf[64];
-    int seen[2] = { 0, 0 };
+    int seen[SC_BENCH_KINDS] = { 0 };
     o->nkinds = 0;
     if (strlen(s) >= sizeof buf)
         return -1;
@@ -134,6 +138,11 @@ static int on_option(void *ctx, int opt, const char *val)
         bad = sc_name_lookup(embree_modes, SC_NAMES_COUNT(embree_modes), val, &o->embree_robust) != 0;
         break;
     case O_TRIANGLE: bad = sc_tri_test_from_name(val, &o->tri) != SC_OK; break;
+    case O_COUNT:
+        if (sc_cli_int(CMD, opts[opt].name, val, 1, 1 << 26, &v) != 0)
+            return 2;
+        o->count = (int)v;
+        return 0;
     case O_PACKET:
         if (sc_cli_int(CMD, opts[opt].name, val, 0, 16, &v) != 0)
             return 2;
@@ -174,8 +183,9 @@ static void print_scene(void *ctx, const sc_bench_scene *s)
     printf("#  eye (%.4g %.4g %.4g) target (%.4g %.4g %.4g) fov %.1f, light (%.4g %.4g %.4g)\n", cam->eye[0],
            cam->eye[1], cam->eye[2], cam->target[0], cam->target[1], cam->target[2], cam->fov_y_deg, s->light[0],
            s->light[1], s->light[2]);
-    printf("#  %zu primary rays (%zu hit), %zu shadow rays (%zu blocked); embree BVH %.1f B/tri (+%.1f for\n"
-           "#  its copy of the mesh)\n", s->primary, s->primary_hits, s->shadow, s->shadow_blocked,
+    printf("#  %zu primary rays (%zu hit), %zu shadow rays (%zu blocked), %zu diffuse rays (%zu hit),\n"
+           "#  %zu random rays (%zu hit); embree BVH %.1f B/tri (+%.1f for its copy of the mesh)\n", s->primary,
+           s->primary_hits, s->shadow, s->shadow_blocked, s->diffuse, s->diffuse_hits, s->random, s->random_hits,
            s->embree_bvh_bpt, s->embree_bpt - s->embree_bvh_bpt);
     printf("%-7s %3s %4s %-8s %6s %5s %8s %8s %6s %6s | %6s %6s %6s %6s %6s %5s %8s %6s\n", "rays", "thr", "leaf",
            "prefilt", "B/tri", "sph%", "Mrays/s", "embree", "ratio", "cyc-r", "nodes", "leaves", "sph", "rej%",
@@ -315,7 +325,8 @@ const sc_cli_cmd sc_cli_bench = {
     .name = "bench",
     .operands = "SCENE...",
     .summary = "tracer Mrays/s per prefilter mode and leaf size, against Embree on the same rays",
-    .details = "Closest-hit (primary) and any-hit (shadow) rays per scene x prefilter mode x leaf size x\n"
+    .details = "Closest-hit (primary, diffuse bounce, random) and any-hit (shadow) rays per scene x\n"
+               "prefilter mode x leaf size x\n"
                "thread count, with per-ray work counters, bytes per triangle, and Embree's\n"
                "rtcIntersect1/rtcOccluded1 on the same rays as the ratio. Every configuration is first\n"
                "checked against brute force on a sample of rays (a difference is an error).\n"

@@ -15,11 +15,11 @@
 
 enum { BRUTE_SAMPLE = 64 };
 
-static const char *const kind_names[2] = { "primary", "shadow" };
+static const char *const kind_names[SC_BENCH_KINDS] = { "primary", "shadow", "diffuse", "random" };
 
 const char *sc_bench_kind_name(int kind)
 {
-    return kind == SC_BENCH_SHADOW ? kind_names[1] : kind_names[0];
+    return kind >= 0 && kind < SC_BENCH_KINDS ? kind_names[kind] : "?";
 }
 
 void sc_bench_options_default(sc_bench_options *o)
@@ -32,6 +32,7 @@ void sc_bench_options_default(sc_bench_options *o)
         o->modes[m] = m;
     o->nmodes = SC_PREFILTER_MODE_COUNT;
     o->width = 512, o->height = 384, o->repeats = 5;
+    o->count = 65536;
     o->trav_cost = -1;
     o->tri = SC_TRI_WATERTIGHT;
 }
@@ -61,10 +62,12 @@ typedef struct bench_ctx {
     sc_checked_mesh mesh;        /* checked once at entry */
     const sc_bench_options *o;
     int cycles_fd;
-    sc_rayset prim, shad;
+    sc_rayset sets[SC_BENCH_KINDS];
     sc_tracer emb;                 /* handle NULL without Embree */
-    sc_hitrec *hits, *emb_hits;
-    uint8_t *occ, *emb_occ;
+    sc_hitrec *hits;               /* the tracer under test's, one per ray of the largest set */
+    uint8_t *occ;
+    sc_hitrec *emb_hits[SC_BENCH_KINDS];   /* Embree's answers per closest-hit set */
+    uint8_t *emb_occ;                      /* and for the shadow rays */
     char *err;
     size_t errlen;
 } bench_ctx;
@@ -72,33 +75,51 @@ typedef struct bench_ctx {
 static sc_status run(const sc_tracer *t, int kind, const sc_rayset *rs, bench_ctx *c, int threads,
                      double *seconds)
 {
-    return sc_tracer_run_threads(t, rs->rays, rs->count, kind == SC_BENCH_PRIMARY ? c->hits : NULL,
+    return sc_tracer_run_threads(t, rs->rays, rs->count, kind != SC_BENCH_SHADOW ? c->hits : NULL,
                                  kind == SC_BENCH_SHADOW ? c->occ : NULL, threads, seconds);
 }
 
-/* The shadow rays come from our own hits in the default configuration, so
- * the ray set does not depend on whether Embree is built in. */
+static int wanted(const sc_bench_options *o, int kind)
+{
+    for (int i = 0; i < o->nkinds; i++)
+        if (o->kinds[i] == kind)
+            return 1;
+    return 0;
+}
+
+static size_t count_hits(const sc_hitrec *h, size_t n)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        k += h[i].prim != SC_HITREC_MISS;
+    return k;
+}
+
+/* The shadow and diffuse rays come from our own hits in the default
+ * configuration, so the ray sets do not depend on whether Embree is built
+ * in. Every set is made (they are cheap); only the asked ones are timed. */
 static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light *lights, size_t nlights,
                            sc_bench_scene *sc)
 {
     const sc_bench_options *o = c->o;
+    sc_rayset *const prim = &c->sets[SC_BENCH_PRIMARY];
     sc->triangles = c->mesh.view.triangle_count;
     for (int k = 0; k < 3; k++)
         sc->lo[k] = c->mesh.lo[k], sc->hi[k] = c->mesh.hi[k];
     sc->camera = *camera;
     sc->camera.width = o->width, sc->camera.height = o->height;
     sc_light_point(lights, nlights, sc->lo, sc->hi, sc->light);
-    sc_status st = sc_rayset_primary(&sc->camera, &c->prim);
+    sc_status st = sc_rayset_primary(&sc->camera, prim);
+    if (st == SC_OK)
+        st = sc_rayset_random(sc->lo, sc->hi, (size_t)o->count, 1, &c->sets[SC_BENCH_RANDOM]);
     if (st != SC_OK) {
-        snprintf(c->err, c->errlen, "primary rays: %s", sc_strerror(st));
+        snprintf(c->err, c->errlen, "rays: %s", sc_strerror(st));
         return st;
     }
-    size_t n = c->prim.count + 1;
-    c->hits = malloc(n * sizeof *c->hits);
-    c->emb_hits = malloc(n * sizeof *c->emb_hits);
-    c->occ = malloc(n);
-    c->emb_occ = malloc(n);
-    if (!c->hits || !c->emb_hits || !c->occ || !c->emb_occ) {
+    size_t n = prim->count > c->sets[SC_BENCH_RANDOM].count ? prim->count : c->sets[SC_BENCH_RANDOM].count;
+    c->hits = malloc((n + 1) * sizeof *c->hits);
+    c->occ = malloc(n + 1);
+    if (!c->hits || !c->occ) {
         snprintf(c->err, c->errlen, "out of memory");
         return SC_ERR_OUT_OF_MEMORY;
     }
@@ -109,22 +130,27 @@ static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light
         snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
         return st;
     }
-    sc_tracer_run(&ref, c->prim.rays, c->prim.count, c->hits, NULL, NULL);
-    st = sc_rayset_shadow(&c->mesh, &c->prim, c->hits, sc->light, &c->shad);
+    sc_tracer_run(&ref, prim->rays, prim->count, c->hits, NULL, NULL);
+    sc->primary = prim->count, sc->primary_hits = count_hits(c->hits, prim->count);
+    st = sc_rayset_shadow(&c->mesh, prim, c->hits, sc->light, &c->sets[SC_BENCH_SHADOW]);
     if (st == SC_OK)
-        sc_tracer_run(&ref, c->shad.rays, c->shad.count, NULL, c->occ, NULL);
-    sc_tracer_free(&ref);
-    if (st != SC_OK) {
-        snprintf(c->err, c->errlen, "shadow rays: %s", sc_strerror(st));
-        return st;
+        st = sc_rayset_diffuse(&c->mesh, prim, c->hits, 1, &c->sets[SC_BENCH_DIFFUSE]);
+    if (st == SC_OK) {
+        const sc_rayset *sh = &c->sets[SC_BENCH_SHADOW], *df = &c->sets[SC_BENCH_DIFFUSE],
+                        *rn = &c->sets[SC_BENCH_RANDOM];
+        sc_tracer_run(&ref, sh->rays, sh->count, NULL, c->occ, NULL);
+        sc->shadow = sh->count, sc->shadow_blocked = 0;
+        for (size_t i = 0; i < sh->count; i++)
+            sc->shadow_blocked += c->occ[i];
+        sc_tracer_run(&ref, df->rays, df->count, c->hits, NULL, NULL);
+        sc->diffuse = df->count, sc->diffuse_hits = count_hits(c->hits, df->count);
+        sc_tracer_run(&ref, rn->rays, rn->count, c->hits, NULL, NULL);
+        sc->random = rn->count, sc->random_hits = count_hits(c->hits, rn->count);
     }
-    sc->primary = c->prim.count, sc->shadow = c->shad.count;
-    sc->primary_hits = sc->shadow_blocked = 0;
-    for (size_t i = 0; i < c->prim.count; i++)
-        sc->primary_hits += c->hits[i].prim != SC_HITREC_MISS;
-    for (size_t i = 0; i < c->shad.count; i++)
-        sc->shadow_blocked += c->occ[i];
-    return SC_OK;
+    sc_tracer_free(&ref);
+    if (st != SC_OK)
+        snprintf(c->err, c->errlen, "shadow/diffuse rays: %s", sc_strerror(st));
+    return st;
 }
 
 static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
@@ -151,8 +177,20 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
     double ntri = (double)c->mesh.view.triangle_count;
     sc->embree_bpt = c->emb.bytes_per_tri;
     sc->embree_bvh_bpt = sc->embree_bpt - 12.0 * (double)c->mesh.view.vertex_count / ntri - 12.0;
-    sc_tracer_run(&c->emb, c->prim.rays, c->prim.count, c->emb_hits, NULL, NULL);
-    sc_tracer_run(&c->emb, c->shad.rays, c->shad.count, NULL, c->emb_occ, NULL);
+    for (int k = 0; k < SC_BENCH_KINDS; k++) {
+        const sc_rayset *rs = &c->sets[k];
+        if (!wanted(c->o, k))
+            continue;
+        if (k == SC_BENCH_SHADOW) {
+            if (!(c->emb_occ = malloc(rs->count + 1)))
+                return SC_ERR_OUT_OF_MEMORY;
+            sc_tracer_run(&c->emb, rs->rays, rs->count, NULL, c->emb_occ, NULL);
+        } else {
+            if (!(c->emb_hits[k] = malloc((rs->count + 1) * sizeof *c->emb_hits[k])))
+                return SC_ERR_OUT_OF_MEMORY;
+            sc_tracer_run(&c->emb, rs->rays, rs->count, c->emb_hits[k], NULL, NULL);
+        }
+    }
     return SC_OK;
 }
 
@@ -162,20 +200,20 @@ static void check(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *r
 {
     const size_t n = rs->count;
     memset(&r->work, 0, sizeof r->work);
-    sc_tracer_run(t, rs->rays, n, kind == SC_BENCH_PRIMARY ? c->hits : NULL,
-                  kind == SC_BENCH_SHADOW ? c->occ : NULL, &r->work);
+    const int any = kind == SC_BENCH_SHADOW;
+    sc_tracer_run(t, rs->rays, n, any ? NULL : c->hits, any ? c->occ : NULL, &r->work);
     size_t step = n > BRUTE_SAMPLE ? n / BRUTE_SAMPLE : 1;
     r->diff_brute = r->diff_embree = 0;
     for (size_t i = 0; i < n; i += step) {
         sc_hitrec h;
         sc_trace_closest_brute(sc_tracer_bvh(t), &rs->rays[i], &h);
-        if (kind == SC_BENCH_PRIMARY ? !sc_same_hit(&c->hits[i], &h, 0.0f) : c->occ[i] != (h.prim != SC_HITREC_MISS))
+        if (!any ? !sc_same_hit(&c->hits[i], &h, 0.0f) : c->occ[i] != (h.prim != SC_HITREC_MISS))
             r->diff_brute++;
     }
     if (c->emb.handle)
         for (size_t i = 0; i < n; i++)
-            r->diff_embree += kind == SC_BENCH_PRIMARY ? !sc_same_hit(&c->hits[i], &c->emb_hits[i], 1e-4f)
-                                                       : c->occ[i] != c->emb_occ[i];
+            r->diff_embree += !any ? !sc_same_hit(&c->hits[i], &c->emb_hits[kind][i], 1e-4f)
+                                   : c->occ[i] != c->emb_occ[i];
 }
 
 /* Paired repeats at one thread count: Embree first on even repeats,
@@ -246,7 +284,7 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
     r.build_ms = info.build_seconds * 1e3;
     for (int ki = 0; ki < o->nkinds && st == SC_OK; ki++) {
         r.kind = o->kinds[ki];
-        const sc_rayset *rs = r.kind == SC_BENCH_PRIMARY ? &c->prim : &c->shad;
+        const sc_rayset *rs = &c->sets[r.kind];
         r.rays = rs->count;
         check(c, &t, r.kind, rs, &r);
         if (r.diff_brute) {
@@ -275,7 +313,8 @@ sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const 
     if (!err || !errlen)
         err = dummy, errlen = sizeof dummy;
     err[0] = 0;
-    if (!mesh || !camera || !o || o->repeats < 1 || o->repeats > SC_BENCH_MAX_REPEATS)
+    if (!mesh || !camera || !o || o->repeats < 1 || o->repeats > SC_BENCH_MAX_REPEATS ||
+        o->count < 1)
         return SC_ERR_INVALID_ARGUMENT;
     for (int i = 0; i < o->nthreads; i++)
         if (o->threads[i] < 1 || o->threads[i] > SC_TRACER_MAX_THREADS)
@@ -298,8 +337,10 @@ sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const 
         for (int mi = 0; mi < o->nmodes && st == SC_OK; mi++)
             st = run_config(&c, o->leaves[li], o->modes[mi], sink);
     sc_tracer_free(&c.emb);
-    free(c.hits), free(c.emb_hits), free(c.occ), free(c.emb_occ);
-    sc_rayset_free(&c.prim);
-    sc_rayset_free(&c.shad);
+    free(c.hits), free(c.occ), free(c.emb_occ);
+    for (int k = 0; k < SC_BENCH_KINDS; k++) {
+        free(c.emb_hits[k]);
+        sc_rayset_free(&c.sets[k]);
+    }
     return st;
 }

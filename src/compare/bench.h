@@ -13,14 +13,21 @@
 #include "spherecull/sc_isa.h"
 #include "tracer.h"
 
-enum { SC_BENCH_MAX_LIST = 16, SC_BENCH_MAX_REPEATS = 64, SC_BENCH_PRIMARY = 0, SC_BENCH_SHADOW = 1 };
+enum { SC_BENCH_MAX_LIST = 16, SC_BENCH_MAX_REPEATS = 64 };
+
+/* The ray sets: primary rays from the camera; shadow rays (any hit) from
+ * their hits to the light; diffuse bounce rays (cosine-weighted) from the
+ * same hits; random rays from the mesh's bounding box. All but the shadow
+ * rays are closest-hit queries. */
+enum { SC_BENCH_PRIMARY, SC_BENCH_SHADOW, SC_BENCH_DIFFUSE, SC_BENCH_RANDOM, SC_BENCH_KINDS };
 
 typedef struct sc_bench_options {
-    int kinds[2], nkinds;                          /* SC_BENCH_PRIMARY / SC_BENCH_SHADOW */
+    int kinds[SC_BENCH_KINDS], nkinds;             /* SC_BENCH_PRIMARY, ... */
     int threads[SC_BENCH_MAX_LIST], nthreads;
     int leaves[SC_BENCH_MAX_LIST], nleaves;
     int modes[SC_BENCH_MAX_LIST], nmodes;          /* sc_prefilter_mode */
     int width, height, repeats;
+    int count;                                     /* random rays */
     int embree_robust;
     float trav_cost;                               /* < 0: the builder's default */
     sc_tri_test tri;
@@ -35,7 +42,7 @@ typedef struct sc_bench_scene {
     size_t triangles;
     float lo[3], hi[3], light[3];
     sc_camera camera;
-    size_t primary, primary_hits, shadow, shadow_blocked;
+    size_t primary, primary_hits, shadow, shadow_blocked, diffuse, diffuse_hits, random, random_hits;
     double embree_bpt, embree_bvh_bpt;   /* NaN without Embree */
 } sc_bench_scene;
 
