@@ -392,6 +392,56 @@ static void test_api(void **state)
     tmesh_free(&m);
 }
 
+/* Incoherent runs of a stream go one by one through the kernels without
+ * the octant branch (closest_incoherent / any_incoherent): on every ISA
+ * level and triangle test they answer bit for bit as the scalar
+ * specification's single-ray kernel does. */
+static void test_streams_incoherent(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 3, 1.0, c);
+    packets b;
+    make_packets(&m, K_MIXED, 23, &b);
+    const size_t n = b.n;
+    sc_hitrec *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
+    int *ref_occ = malloc(n * sizeof *ref_occ);
+    int32_t *occ = malloc(n * sizeof *occ);
+    const sc_isa start = sc_isa_active();
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
+        assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
+        sc_bvh *bvh = build(&m, 8, SC_PREFILTER_OFF, (sc_tri_test)tt);
+        size_t hits = 0;
+        for (size_t i = 0; i < n; i++) {
+            assert_int_equal(sc_trace_closest(bvh, &b.rays[i], &ref[i], NULL), SC_OK);
+            assert_int_equal(sc_trace_any(bvh, &b.rays[i], &ref_occ[i], NULL), SC_OK);
+            hits += ref[i].prim != SC_HITREC_MISS;
+        }
+        assert_true(hits > n / 8 && hits < n);      /* both answers occur */
+        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
+                continue;
+            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+            memset(h, 0x5a, n * sizeof *h);
+            assert_int_equal(sc_trace_closest_n(bvh, b.rays, sizeof *b.rays, h, sizeof *h, n, 0, NULL), SC_OK);
+            assert_int_equal(sc_trace_any_n(bvh, b.rays, sizeof *b.rays, occ, sizeof *occ, n, 0, NULL), SC_OK);
+            size_t bad = 0;
+            for (size_t i = 0; i < n; i++)
+                bad += memcmp(&h[i], &ref[i], sizeof ref[i]) != 0 || occ[i] != ref_occ[i];
+            if (bad)
+                print_message("%s %s: %zu of %zu rays differ from the scalar kernel\n",
+                              sc_tri_test_name((sc_tri_test)tt), sc_isa_name((sc_isa)isa), bad, n);
+            assert_int_equal(bad, 0);
+        }
+        sc_bvh_free(bvh);
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    free(ref), free(h), free(ref_occ), free(occ);
+    free(b.rays), free(b.valid);
+    tmesh_free(&m);
+}
+
 /* Streams: byte strides, coherent runs (camera packets) and incoherent ones
  * (mixed) in one call, a tail shorter than 16, a refused ray: every other
  * ray still gets its single-ray answer. */
@@ -483,6 +533,7 @@ int main(void)
         cmocka_unit_test(test_api),
         cmocka_unit_test(test_other_tests),
         cmocka_unit_test(test_streams),
+        cmocka_unit_test(test_streams_incoherent),
         cmocka_unit_test(test_icosphere),
         cmocka_unit_test(test_soup_slivers),
         cmocka_unit_test(test_bunny),

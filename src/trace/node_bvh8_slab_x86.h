@@ -17,8 +17,8 @@ node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax, 
     const char *nb = (const char *)node;
     /* With the ray octant known at compile time (OCT >= 0) the near and far
      * rows are fixed offsets: no per-ray offsets held in registers. */
-#define NEAR(k) (OCT >= 0 ? (size_t)(2 * (k) + ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->near_off[k])
-#define FAR(k) (OCT >= 0 ? (size_t)(2 * (k) + 1 - ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->far_off[k])
+#define NEAR(k) (OCT >= 0 && OCT < SC_OCT_ANY ? (size_t)(2 * (k) + ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->near_off[k])
+#define FAR(k) (OCT >= 0 && OCT < SC_OCT_ANY ? (size_t)(2 * (k) + 1 - ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->far_off[k])
 #define ROW(off) _mm256_load_ps((const float *)(const void *)(nb + (off)))
     __m256 tnx = _mm256_fmsub_ps(ROW(NEAR(0)), c->rd[0], c->ordn[0]);
     __m256 tny = _mm256_fmsub_ps(ROW(NEAR(1)), c->rd[1], c->ordn[1]);

@@ -81,22 +81,29 @@ SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
     *xc0 = fmaf(S * S, SC_EXACT_CS, 0x1p-121f);
 }
 
+/* The traversal's OCT parameter: 0..7 a non-parallel ray of that octant
+ * (the near and far rows of the node test are constants), SC_OCT_ANY a
+ * non-parallel ray of any octant (rows read per ray), -2 a parallel ray,
+ * -1 decided per ray (the counting kernels). */
+#define SC_OCT_ANY 8
+
 /* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other
  * two, swapped for d[kz] < 0 to keep the winding (matters only for
- * one-sided tests). */
+ * one-sided tests). Written as selects, not branches: for incoherent rays
+ * the axes are random and branches on them mispredict. */
 SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, int *kz_out)
 {
-    int kz = 0;
-    if (fabsf(d[1]) > fabsf(d[kz])) kz = 1;
-    if (fabsf(d[2]) > fabsf(d[kz])) kz = 2;
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
-    if (d[kz] < 0) {
-        int t = kx;
-        kx = ky;
-        ky = t;
-    }
-    *kx_out = kx, *ky_out = ky, *kz_out = kz;
+    const float a0 = fabsf(d[0]), a1 = fabsf(d[1]), a2 = fabsf(d[2]);
+    int kz = a1 > a0;
+    const float am = kz ? a1 : a0;
+    kz = a2 > am ? 2 : kz;
+    const float dz = kz == 0 ? d[0] : kz == 1 ? d[1] : d[2];
+    const int kx = kz == 2 ? 0 : kz + 1;
+    const int ky = kx == 2 ? 0 : kx + 1;
+    const int neg = dz < 0;
+    *kx_out = neg ? ky : kx;
+    *ky_out = neg ? kx : ky;
+    *kz_out = kz;
 }
 
 /* What the watertight and Moller lane tests read (origin, direction, range,

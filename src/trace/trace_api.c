@@ -323,9 +323,20 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
         }
     }
 one_by_one:;
+    /* Rays that failed the coherence tests: the kernels without the octant
+     * branch, which random directions mispredict (not with statistics,
+     * which have one generic kernel anyway). */
     sc_status status = SC_OK;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
     for (unsigned i = 0; i < cnt; i++) {
         sc_status st;
+        if (!stats && sc_ray_valid(RAY(i))) {
+            if (any)
+                *(int32_t *)(void *)OUT(i) = k->any_incoherent(bvh, RAY(i));
+            else
+                k->closest_incoherent(bvh, RAY(i), (sc_hitrec *)(void *)OUT(i));
+            continue;
+        }
         if (any) {
             int o = 0;
             st = sc_trace_any(bvh, RAY(i), &o, stats);

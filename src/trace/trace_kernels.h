@@ -26,6 +26,10 @@ static inline void sc_hit_ids_normal(sc_hitrec *h, const float *rows, unsigned W
 typedef struct sc_trace_kernels {
     void (*closest)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
     int (*any)(const sc_bvh *bvh, const sc_ray *ray);
+    /* The same answers, for rays known to be incoherent: no branch on the
+     * ray's octant (traverse_bvh8_single.h). */
+    void (*closest_incoherent)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
+    int (*any_incoherent)(const sc_bvh *bvh, const sc_ray *ray);
     void (*closest_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
     int (*any_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_trace_stats *st);
     /* Packets (lanes: the valid lanes, rays checked; st may be NULL). NULL

@@ -16,9 +16,15 @@ typedef struct trace_ctx { sc_ray_pre pre; } trace_ctx;
 
 static inline void ctx_init(trace_ctx *c, const sc_ray_pre *p) { c->pre = *p; }
 /* Non-parallel rays: here the same set-up as any other. */
-static inline void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bvh)
+static inline void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bvh, const int TEST)
 {
+    (void)TEST;
     sc_ray_precompute(r, &c->pre, bvh->root_lo, bvh->root_hi);
+}
+/* sc_ray_precompute has set the near and far rows already. */
+static inline void ctx_set_rows(trace_ctx *c, const sc_ray *r)
+{
+    (void)c, (void)r;
 }
 
 static inline unsigned node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax,

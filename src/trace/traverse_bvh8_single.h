@@ -3,7 +3,9 @@
  * traverse_bvh8_x86.h) first defines, for its ISA:
  *   SC_TARGET        the function attribute (target ISA; empty for scalar)
  *   trace_ctx        per-ray state, filled by ctx_init (any ray) or
- *                    ctx_init_fast (a non-parallel ray)
+ *                    ctx_init_fast (a non-parallel ray), and ctx_set_rows
+ *                    (its near and far rows when the octant is not a
+ *                    compile-time constant)
  *   node_test        8 child boxes -> hit mask + entry distances;
  *                    node_test_par the same for parallel rays
  *   sphere_reject    one ray against a leaf's sphere block (its own ISA's
@@ -36,7 +38,9 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     trace_ctx ctx;
     int parallel = 0;
     if (OCT >= 0) {
-        ctx_init_fast(&ctx, ray, bvh);
+        ctx_init_fast(&ctx, ray, bvh, TEST);
+        if (OCT == SC_OCT_ANY)
+            ctx_set_rows(&ctx, ray);
     } else {
         sc_ray_pre p;
         sc_ray_precompute(ray, &p, bvh->root_lo, bvh->root_hi);
@@ -215,6 +219,19 @@ SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_h
     }
 }
 
+/* Rays known to be incoherent (the stream calls' one-by-one path, packet
+ * lanes that parted ways): one body for every octant. The octant switch
+ * above is an indirect jump on the ray's direction signs; for rays in
+ * random directions it mispredicts about 7 times in 8, which costs more
+ * than the constant rows save (docs/compare.md, seventh session). */
+SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
+                                           const int TEST, const uint64_t root)
+{
+    if (sc_ray_parallel(r))
+        return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
+    return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
+}
+
 static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
     traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT, 0);
@@ -222,6 +239,14 @@ static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hi
 static SC_TARGET int any_watertight(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT, 0);
+}
+static SC_TARGET void closest_incoherent_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_incoherent(b, r, h, 0, SC_TRI_WATERTIGHT, 0);
+}
+static SC_TARGET int any_incoherent_watertight(const sc_bvh *b, const sc_ray *r)
+{
+    return traverse_incoherent(b, r, NULL, 1, SC_TRI_WATERTIGHT, 0);
 }
 static SC_TARGET void closest_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
@@ -238,12 +263,12 @@ static SC_TARGET int any_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_t
 static SC_TARGET __attribute__((noinline, unused)) void closest_subtree_watertight(const sc_bvh *b, const sc_ray *r,
                                                                          sc_hitrec *h, uint64_t root)
 {
-    traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT, root);
+    traverse_incoherent(b, r, h, 0, SC_TRI_WATERTIGHT, root);
 }
 static SC_TARGET __attribute__((noinline, unused)) int any_subtree_watertight(const sc_bvh *b, const sc_ray *r,
                                                                     uint64_t root)
 {
-    return traverse_by_octant(b, r, NULL, 1, SC_TRI_WATERTIGHT, root);
+    return traverse_incoherent(b, r, NULL, 1, SC_TRI_WATERTIGHT, root);
 }
 static SC_TARGET __attribute__((noinline, unused)) int subtree_stats_watertight(const sc_bvh *b, const sc_ray *r,
                                                                       sc_hitrec *h, sc_trace_stats *s,
@@ -261,6 +286,14 @@ static SC_TARGET int any_moller(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_by_octant(b, r, NULL, 1, SC_TRI_MOLLER, 0);
 }
+static SC_TARGET void closest_incoherent_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_incoherent(b, r, h, 0, SC_TRI_MOLLER, 0);
+}
+static SC_TARGET int any_incoherent_moller(const sc_bvh *b, const sc_ray *r)
+{
+    return traverse_incoherent(b, r, NULL, 1, SC_TRI_MOLLER, 0);
+}
 static SC_TARGET void closest_stats_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
     traverse_single(b, r, h, s, 0, 1, SC_TRI_MOLLER, -1, 0);
@@ -277,6 +310,14 @@ static SC_TARGET void closest_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec 
 static SC_TARGET int any_exact(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_by_octant(b, r, NULL, 1, SC_TRI_EXACT, 0);
+}
+static SC_TARGET void closest_incoherent_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_incoherent(b, r, h, 0, SC_TRI_EXACT, 0);
+}
+static SC_TARGET int any_incoherent_exact(const sc_bvh *b, const sc_ray *r)
+{
+    return traverse_incoherent(b, r, NULL, 1, SC_TRI_EXACT, 0);
 }
 static SC_TARGET void closest_stats_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
@@ -296,10 +337,16 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
         [SC_TRI_WATERTIGHT] = { .closest = closest_watertight, .any = any_watertight,                 \
+                                .closest_incoherent = closest_incoherent_watertight,                  \
+                                .any_incoherent = any_incoherent_watertight,                          \
                                 .closest_stats = closest_stats_watertight,                            \
                                 .any_stats = any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT },      \
         [SC_TRI_MOLLER] = { .closest = closest_moller, .any = any_moller,                             \
+                            .closest_incoherent = closest_incoherent_moller,                          \
+                            .any_incoherent = any_incoherent_moller,                                  \
                             .closest_stats = closest_stats_moller, .any_stats = any_stats_moller },   \
         [SC_TRI_EXACT] = { .closest = closest_exact, .any = any_exact,                                \
+                           .closest_incoherent = closest_incoherent_exact,                            \
+                           .any_incoherent = any_incoherent_exact,                                    \
                            .closest_stats = closest_stats_exact, .any_stats = any_stats_exact },      \
     }
