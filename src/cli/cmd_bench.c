@@ -29,10 +29,6 @@
  * yardstick, printed and written in every CSV row. */
 static char embree_build[128];
 
-static const sc_name ray_kinds[] = { { "primary", SC_BENCH_PRIMARY },
-                                     { "shadow", SC_BENCH_SHADOW },
-                                     { "diffuse", SC_BENCH_DIFFUSE },
-                                     { "random", SC_BENCH_RANDOM } };
 static const sc_name embree_modes[] = { { "default", 0 }, { "robust", 1 } };
 
 enum { O_CSV, O_RAYS, O_THREADS, O_LEAF, O_PREFILTER, O_SIZE, O_REPEATS, O_ISA, O_EMBREE, O_TRIANGLE, O_TRAV,
@@ -89,8 +85,8 @@ static int parse_kinds(const char *s, sc_bench_options *o)
     snprintf(buf, sizeof buf, "%s", s);
     char *save = NULL;
     for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-        int k;
-        if (sc_name_lookup(ray_kinds, SC_NAMES_COUNT(ray_kinds), tok, &k) != 0 || seen[k])
+        sc_rayset_kind k;
+        if (sc_rayset_kind_from_name(tok, &k) != SC_OK || k == SC_RAYS_ADVERSARIAL || seen[k])
             return -1;
         seen[k] = 1;
         o->kinds[o->nkinds++] = k;
@@ -199,7 +195,7 @@ static void print_row(void *ctx, const sc_bench_row *r)
     const sc_tracer_counters *w = &r->work;
     const double n = w->rays ? (double)w->rays : 1;
     const double rej = w->sphere_tests ? (double)w->sphere_rejects / (double)w->sphere_tests : 0.0;
-    const char *kind = sc_bench_kind_name(r->kind), *mode = sc_prefilter_mode_name(r->prefilter);
+    const char *kind = sc_rayset_kind_name(r->kind), *mode = sc_prefilter_mode_name(r->prefilter);
     printf("%-7s %3d %4d %-8s %6.1f %5.1f %8.2f %8.2f %6.3f %6.3f | %6.2f %6.3f %6.2f %6.1f %6.2f %5.3f %8.1f %6zu\n",
            kind, r->threads, r->leaf, mode, r->bytes_per_tri, r->sphere_leaf_pct, r->mrays, r->embree_mrays, r->ratio,
            r->cycle_ratio, (double)w->nodes / n, (double)w->leaves / n, (double)w->sphere_tests / n, 100.0 * rej,
@@ -326,8 +322,8 @@ const sc_cli_cmd sc_cli_bench = {
     .operands = "SCENE...",
     .summary = "tracer Mrays/s per prefilter mode and leaf size, against Embree on the same rays",
     .details = "Closest-hit (primary, diffuse bounce, random) and any-hit (shadow) rays per scene x\n"
-               "prefilter mode x leaf size x\n"
-               "thread count, with per-ray work counters, bytes per triangle, and Embree's\n"
+               "prefilter mode x leaf size x thread count, with per-ray work counters, bytes per\n"
+               "triangle, and Embree's\n"
                "rtcIntersect1/rtcOccluded1 on the same rays as the ratio. Every configuration is first\n"
                "checked against brute force on a sample of rays (a difference is an error).\n"
                "SCENE: a mesh file assimp reads, a scenes/*.json file, proc:KIND:N or cache:NAME.\n",

@@ -15,17 +15,10 @@
 
 enum { BRUTE_SAMPLE = 64 };
 
-static const char *const kind_names[SC_BENCH_KINDS] = { "primary", "shadow", "diffuse", "random" };
-
-const char *sc_bench_kind_name(int kind)
-{
-    return kind >= 0 && kind < SC_BENCH_KINDS ? kind_names[kind] : "?";
-}
-
 void sc_bench_options_default(sc_bench_options *o)
 {
     memset(o, 0, sizeof *o);
-    o->kinds[0] = SC_BENCH_PRIMARY, o->kinds[1] = SC_BENCH_SHADOW, o->nkinds = 2;
+    o->kinds[0] = SC_RAYS_PRIMARY, o->kinds[1] = SC_RAYS_SHADOW, o->nkinds = 2;
     o->threads[0] = 1, o->threads[1] = 2, o->nthreads = 2;
     o->leaves[0] = 4, o->leaves[1] = 8, o->leaves[2] = 16, o->nleaves = 3;
     for (int m = 0; m < SC_PREFILTER_MODE_COUNT; m++)
@@ -72,14 +65,14 @@ typedef struct bench_ctx {
     size_t errlen;
 } bench_ctx;
 
-static sc_status run(const sc_tracer *t, int kind, const sc_rayset *rs, bench_ctx *c, int threads,
+static sc_status run(const sc_tracer *t, sc_rayset_kind kind, const sc_rayset *rs, bench_ctx *c, int threads,
                      double *seconds)
 {
-    return sc_tracer_run_threads(t, rs->rays, rs->count, kind != SC_BENCH_SHADOW ? c->hits : NULL,
-                                 kind == SC_BENCH_SHADOW ? c->occ : NULL, threads, seconds);
+    return sc_tracer_run_threads(t, rs->rays, rs->count, kind != SC_RAYS_SHADOW ? c->hits : NULL,
+                                 kind == SC_RAYS_SHADOW ? c->occ : NULL, threads, seconds);
 }
 
-static int wanted(const sc_bench_options *o, int kind)
+static int wanted(const sc_bench_options *o, sc_rayset_kind kind)
 {
     for (int i = 0; i < o->nkinds; i++)
         if (o->kinds[i] == kind)
@@ -102,7 +95,7 @@ static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light
                            sc_bench_scene *sc)
 {
     const sc_bench_options *o = c->o;
-    sc_rayset *const prim = &c->sets[SC_BENCH_PRIMARY];
+    sc_rayset *const prim = &c->sets[SC_RAYS_PRIMARY];
     sc->triangles = c->mesh.view.triangle_count;
     for (int k = 0; k < 3; k++)
         sc->lo[k] = c->mesh.lo[k], sc->hi[k] = c->mesh.hi[k];
@@ -111,12 +104,12 @@ static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light
     sc_light_point(lights, nlights, sc->lo, sc->hi, sc->light);
     sc_status st = sc_rayset_primary(&sc->camera, prim);
     if (st == SC_OK)
-        st = sc_rayset_random(sc->lo, sc->hi, (size_t)o->count, 1, &c->sets[SC_BENCH_RANDOM]);
+        st = sc_rayset_random(sc->lo, sc->hi, (size_t)o->count, 1, &c->sets[SC_RAYS_RANDOM]);
     if (st != SC_OK) {
         snprintf(c->err, c->errlen, "rays: %s", sc_strerror(st));
         return st;
     }
-    size_t n = prim->count > c->sets[SC_BENCH_RANDOM].count ? prim->count : c->sets[SC_BENCH_RANDOM].count;
+    size_t n = prim->count > c->sets[SC_RAYS_RANDOM].count ? prim->count : c->sets[SC_RAYS_RANDOM].count;
     c->hits = malloc((n + 1) * sizeof *c->hits);
     c->occ = malloc(n + 1);
     if (!c->hits || !c->occ) {
@@ -132,12 +125,12 @@ static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light
     }
     sc_tracer_run(&ref, prim->rays, prim->count, c->hits, NULL, NULL);
     sc->primary = prim->count, sc->primary_hits = count_hits(c->hits, prim->count);
-    st = sc_rayset_shadow(&c->mesh, prim, c->hits, sc->light, &c->sets[SC_BENCH_SHADOW]);
+    st = sc_rayset_shadow(&c->mesh, prim, c->hits, sc->light, &c->sets[SC_RAYS_SHADOW]);
     if (st == SC_OK)
-        st = sc_rayset_diffuse(&c->mesh, prim, c->hits, 1, &c->sets[SC_BENCH_DIFFUSE]);
+        st = sc_rayset_diffuse(&c->mesh, prim, c->hits, 1, &c->sets[SC_RAYS_DIFFUSE]);
     if (st == SC_OK) {
-        const sc_rayset *sh = &c->sets[SC_BENCH_SHADOW], *df = &c->sets[SC_BENCH_DIFFUSE],
-                        *rn = &c->sets[SC_BENCH_RANDOM];
+        const sc_rayset *sh = &c->sets[SC_RAYS_SHADOW], *df = &c->sets[SC_RAYS_DIFFUSE],
+                        *rn = &c->sets[SC_RAYS_RANDOM];
         sc_tracer_run(&ref, sh->rays, sh->count, NULL, c->occ, NULL);
         sc->shadow = sh->count, sc->shadow_blocked = 0;
         for (size_t i = 0; i < sh->count; i++)
@@ -179,9 +172,9 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
     sc->embree_bvh_bpt = sc->embree_bpt - 12.0 * (double)c->mesh.view.vertex_count / ntri - 12.0;
     for (int k = 0; k < SC_BENCH_KINDS; k++) {
         const sc_rayset *rs = &c->sets[k];
-        if (!wanted(c->o, k))
+        if (!wanted(c->o, (sc_rayset_kind)k))
             continue;
-        if (k == SC_BENCH_SHADOW) {
+        if (k == SC_RAYS_SHADOW) {
             if (!(c->emb_occ = malloc(rs->count + 1)))
                 return SC_ERR_OUT_OF_MEMORY;
             sc_tracer_run(&c->emb, rs->rays, rs->count, NULL, c->emb_occ, NULL);
@@ -196,11 +189,11 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
 
 /* Hits of one configuration against brute force (a sample; same
  * arithmetic, so only exact ties may differ) and against Embree (all). */
-static void check(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *rs, sc_bench_row *r)
+static void check(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, const sc_rayset *rs, sc_bench_row *r)
 {
     const size_t n = rs->count;
     memset(&r->work, 0, sizeof r->work);
-    const int any = kind == SC_BENCH_SHADOW;
+    const int any = kind == SC_RAYS_SHADOW;
     sc_tracer_run(t, rs->rays, n, any ? NULL : c->hits, any ? c->occ : NULL, &r->work);
     size_t step = n > BRUTE_SAMPLE ? n / BRUTE_SAMPLE : 1;
     r->diff_brute = r->diff_embree = 0;
@@ -218,7 +211,7 @@ static void check(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *r
 
 /* Paired repeats at one thread count: Embree first on even repeats,
  * second on odd ones. */
-static void time_pairs(bench_ctx *c, const sc_tracer *t, int kind, const sc_rayset *rs, int thr, sc_bench_row *r)
+static void time_pairs(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, const sc_rayset *rs, int thr, sc_bench_row *r)
 {
     const int reps = c->o->repeats;
     double t_o[SC_BENCH_MAX_REPEATS], t_e[SC_BENCH_MAX_REPEATS], ratio[SC_BENCH_MAX_REPEATS],
@@ -291,7 +284,7 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
             size_t step = rs->count > BRUTE_SAMPLE ? rs->count / BRUTE_SAMPLE : 1;
             snprintf(c->err, c->errlen, "leaf %d %s: %zu of %zu sampled %s rays differ from brute force",
                      cfg.leaf_size, sc_prefilter_mode_name(cfg.prefilter), r.diff_brute,
-                     (rs->count + step - 1) / step, kind_names[r.kind]);
+                     (rs->count + step - 1) / step, sc_rayset_kind_name(r.kind));
             st = SC_ERR_INVALID_ARGUMENT;
             break;
         }

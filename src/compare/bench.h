@@ -13,16 +13,15 @@
 #include "spherecull/sc_isa.h"
 #include "tracer.h"
 
-enum { SC_BENCH_MAX_LIST = 16, SC_BENCH_MAX_REPEATS = 64 };
-
-/* The ray sets: primary rays from the camera; shadow rays (any hit) from
- * their hits to the light; diffuse bounce rays (cosine-weighted) from the
- * same hits; random rays from the mesh's bounding box. All but the shadow
- * rays are closest-hit queries. */
-enum { SC_BENCH_PRIMARY, SC_BENCH_SHADOW, SC_BENCH_DIFFUSE, SC_BENCH_RANDOM, SC_BENCH_KINDS };
+/* The ray sets (sc_rays.h): primary rays from the camera; shadow rays (any
+ * hit) from their hits to the light; diffuse bounce rays from the same
+ * hits; random rays from the mesh's bounding box. All but the shadow rays
+ * are closest-hit queries. Adversarial rays are compare's, not timed here. */
+enum { SC_BENCH_MAX_LIST = 16, SC_BENCH_MAX_REPEATS = 64, SC_BENCH_KINDS = SC_RAYS_ADVERSARIAL };
 
 typedef struct sc_bench_options {
-    int kinds[SC_BENCH_KINDS], nkinds;             /* SC_BENCH_PRIMARY, ... */
+    sc_rayset_kind kinds[SC_BENCH_KINDS];          /* SC_RAYS_PRIMARY .. SC_RAYS_RANDOM */
+    int nkinds;
     int threads[SC_BENCH_MAX_LIST], nthreads;
     int leaves[SC_BENCH_MAX_LIST], nleaves;
     int modes[SC_BENCH_MAX_LIST], nmodes;          /* sc_prefilter_mode */
@@ -35,7 +34,6 @@ typedef struct sc_bench_options {
 } sc_bench_options;
 
 void sc_bench_options_default(sc_bench_options *o);
-const char *sc_bench_kind_name(int kind);
 
 /* What one scene's rays are. */
 typedef struct sc_bench_scene {
@@ -48,7 +46,8 @@ typedef struct sc_bench_scene {
 
 /* One measurement. */
 typedef struct sc_bench_row {
-    int kind, threads, leaf;
+    sc_rayset_kind kind;
+    int threads, leaf;
     sc_prefilter_mode prefilter;
     sc_isa isa;                                       /* the active level (sc_isa.h) */
     size_t rays;

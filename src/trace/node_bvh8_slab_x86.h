@@ -15,10 +15,12 @@ node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax, 
                const int OCT, const int WANT_DIST)
 {
     const char *nb = (const char *)node;
-    /* With the ray octant known at compile time (OCT >= 0) the near and far
-     * rows are fixed offsets: no per-ray offsets held in registers. */
-#define NEAR(k) (OCT >= 0 && OCT < SC_OCT_ANY ? (size_t)(2 * (k) + ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->near_off[k])
-#define FAR(k) (OCT >= 0 && OCT < SC_OCT_ANY ? (size_t)(2 * (k) + 1 - ((OCT >> (k)) & 1)) * SC_BVH_N * sizeof(float) : c->far_off[k])
+    /* With the ray octant known at compile time (0 <= OCT < SC_OCT_ANY) the
+     * near and far rows are fixed offsets: no per-ray offsets in registers. */
+#define ROWB(row) ((size_t)(row) * SC_BVH_N * sizeof(float))
+#define FIXED (OCT >= 0 && OCT < SC_OCT_ANY)
+#define NEAR(k) (FIXED ? ROWB(2 * (k) + ((OCT >> (k)) & 1)) : c->near_off[k])
+#define FAR(k) (FIXED ? ROWB(2 * (k) + 1 - ((OCT >> (k)) & 1)) : c->far_off[k])
 #define ROW(off) _mm256_load_ps((const float *)(const void *)(nb + (off)))
     __m256 tnx = _mm256_fmsub_ps(ROW(NEAR(0)), c->rd[0], c->ordn[0]);
     __m256 tny = _mm256_fmsub_ps(ROW(NEAR(1)), c->rd[1], c->ordn[1]);
@@ -29,6 +31,8 @@ node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax, 
 #undef ROW
 #undef NEAR
 #undef FAR
+#undef FIXED
+#undef ROWB
     (void)tmin;
     __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, c->tmin));
     __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, _mm256_set1_ps(tmax)));

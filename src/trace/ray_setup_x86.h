@@ -20,7 +20,6 @@ typedef struct {
     __m256 xK, xc0;                           /* exact test's edge bound */
     __m256 org[3], rdp[3];                    /* parallel rays' node test */
     float org_s[3], dir_s[3];
-    float m_s[4];                             /* |origin - root box| per axis (lane 3 unused) */
     int kx, ky, kz;
 } trace_ctx;
 
@@ -49,31 +48,6 @@ SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
     c->xc0 = _mm256_set1_ps(p->xc0);
 }
 
-/* The triangle tests' part of ctx_init_fast: the shear of the watertight
- * test (as sc_ray_precompute_shear) and, for the exact test only, its edge
- * bound from the |origin - root box| maxima m_s. */
-SC_X86_INLINE void ctx_init_leaf(trace_ctx *c, const sc_ray *r, const int TEST)
-{
-    if (TEST == SC_TRI_EXACT) {
-        float xK, xc0;
-        sc_exact_consts(c->m_s, &xK, &xc0);
-        c->xK = _mm256_set1_ps(xK);
-        c->xc0 = _mm256_set1_ps(xc0);
-    }
-    const float *dd = r->dir;
-    int kx, ky, kz;
-    sc_shear_axes(dd, &kx, &ky, &kz);
-    c->kx = kx, c->ky = ky, c->kz = kz;
-    c->okx = _mm256_set1_ps(r->org[kx]);
-    c->oky = _mm256_set1_ps(r->org[ky]);
-    c->okz = _mm256_set1_ps(r->org[kz]);
-    c->Sx = _mm256_set1_ps(dd[kx] / dd[kz]);
-    c->Sy = _mm256_set1_ps(dd[ky] / dd[kz]);
-    c->Sz = _mm256_set1_ps(1.0f / dd[kz]);
-    for (int k = 0; k < 3; k++)
-        c->org_s[k] = r->org[k], c->dir_s[k] = dd[k];
-}
-
 /* The set-up of a non-parallel ray (every kernel with a known octant):
  * sc_ray_precompute's arithmetic with the three axes in one xmm register,
  * one divide instead of three and no stores and reloads of the struct. The
@@ -81,10 +55,10 @@ SC_X86_INLINE void ctx_init_leaf(trace_ctx *c, const sc_ray *r, const int TEST)
  * (primary rays, and bounce rays that leave the scene). Lane k computes
  * exactly what the scalar code computes for axis k (maxps(a, b) = a > b ?
  * a : b = sc_fmax), so every ISA still sees the same bits. Lane 3 holds
- * tmin/tmax/root_hi[0] and is ignored. The triangle tests' part
- * (ctx_init_leaf) is set up here too, not at the first leaf: there its
- * divides sat on the critical path and rays that reach leaves lost 4-6 %
- * (docs/compare.md, seventh session). */
+ * tmin/tmax/root_hi[0] and is ignored. The triangle tests' shear is set
+ * up here, not at the first leaf: here its divides overlap the first node
+ * tests (docs/compare.md, seventh session); the exact test's edge bound
+ * only for the exact test. */
 SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bvh, const int TEST)
 {
     const __m128 sgn = _mm_set1_ps(-0.0f);
@@ -104,8 +78,27 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
 #undef BC
     c->tmin = _mm256_set1_ps(r->tmin);
-    _mm_storeu_ps(c->m_s, m);
-    ctx_init_leaf(c, r, TEST);
+    if (TEST == SC_TRI_EXACT) {
+        const float mk[3] = { m[0], m[1], m[2] };
+        float xK, xc0;
+        sc_exact_consts(mk, &xK, &xc0);
+        c->xK = _mm256_set1_ps(xK);
+        c->xc0 = _mm256_set1_ps(xc0);
+    }
+    /* the shear of the watertight test, as sc_ray_precompute_shear */
+    const float *dd = r->dir;
+    int kx, ky, kz;
+    sc_shear_axes(dd, &kx, &ky, &kz);
+    c->kx = kx, c->ky = ky, c->kz = kz;
+    c->okx = _mm256_set1_ps(r->org[kx]);
+    c->oky = _mm256_set1_ps(r->org[ky]);
+    c->okz = _mm256_set1_ps(r->org[kz]);
+    c->Sx = _mm256_set1_ps(dd[kx] / dd[kz]);
+    c->Sy = _mm256_set1_ps(dd[ky] / dd[kz]);
+    const float rdk[3] = { rd[0], rd[1], rd[2] };   /* 1 / d, already divided */
+    c->Sz = _mm256_set1_ps(rdk[kz]);
+    for (int k = 0; k < 3; k++)
+        c->org_s[k] = r->org[k], c->dir_s[k] = dd[k];
 }
 
 /* The near and far rows of a non-parallel ray whose octant is not a
