@@ -21,3 +21,7 @@ sc_add_test(test_threads SOURCES test_threads.c LIBS Threads::Threads FTZ LABELS
 # leaf size; camera, edge-aimed, far, wide, shadow and mixed packets).
 sc_add_test(test_packets SOURCES test_packets.c
             ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes FTZ)
+
+# The compact sphere summary: each decoded sphere contains its triangle
+# (MPFR), the same bits with FTZ|DAZ, unencodable leaves never reject.
+sc_add_test(test_leaf_summary SOURCES test_leaf_summary.c FTZ)

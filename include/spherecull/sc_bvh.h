@@ -33,6 +33,12 @@
  *            their spheres at build time and use them iff the fraction that
  *            all spheres reject is at least SC_BVH_AUTO_THRESHOLD16.
  *            Deterministic: the lines are seeded by leaf.
+ *   compact  every leaf carries its minimal spheres quantised to 4 bytes each
+ *            against the leaf's box (one cache line for a leaf of 8, against
+ *            the 4.5 lines of its vertices), padded outward so each still
+ *            contains its triangle; a ray that every sphere rejects skips the
+ *            leaf's vertices without fetching them. For big scenes, where
+ *            fetching a leaf costs more than testing it.
  * Every mode returns exactly the same hits; only the work differs.
  */
 #ifndef SPHERECULL_SC_BVH_H
@@ -59,6 +65,7 @@ typedef enum sc_prefilter_mode {
     SC_PREFILTER_CIRCUM,
     SC_PREFILTER_MINIMAL,
     SC_PREFILTER_AUTO,
+    SC_PREFILTER_COMPACT,
     SC_PREFILTER_MODE_COUNT
 } sc_prefilter_mode;
 
@@ -87,10 +94,10 @@ typedef struct sc_bvh_info {
     size_t skipped_triangles;    /* non-finite, left out */
     size_t nodes;                /* 8-wide inner nodes */
     size_t leaves;
-    size_t leaves_with_spheres;  /* all leaves for circum/minimal, the chosen ones for auto */
+    size_t leaves_with_spheres;  /* all leaves for circum/minimal/compact, the chosen ones for auto */
     size_t node_bytes;
     size_t leaf_bytes;           /* vertices + primitive ids + spheres + alignment */
-    size_t sphere_bytes;         /* the part of leaf_bytes that holds spheres */
+    size_t sphere_bytes;         /* the part of leaf_bytes that holds spheres or summaries */
     size_t total_bytes;          /* everything the handle owns */
     int depth;                   /* of the 8-wide tree, root = 1 */
     double sah_cost;             /* of the 8-wide tree, in the config's cost units */
@@ -122,7 +129,7 @@ SC_API sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg
 SC_API void sc_bvh_free(sc_bvh *bvh);
 SC_API sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 
-/* "off", "circum", "minimal", "auto"; "watertight", "moller", "exact". */
+/* "off", "circum", "minimal", "auto", "compact"; "watertight", "moller", "exact". */
 SC_API const char *sc_prefilter_mode_name(sc_prefilter_mode mode);
 SC_API sc_status sc_prefilter_mode_from_name(const char *name, sc_prefilter_mode *out);
 SC_API const char *sc_tri_test_name(sc_tri_test test);

@@ -204,7 +204,7 @@ sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info)
 
 /* ---- names -------------------------------------------------------------- */
 
-static const char *const mode_names[SC_PREFILTER_MODE_COUNT] = { "off", "circum", "minimal", "auto" };
+static const char *const mode_names[SC_PREFILTER_MODE_COUNT] = { "off", "circum", "minimal", "auto", "compact" };
 static const char *const test_names[SC_TRI_TEST_COUNT] = { "watertight", "moller", "exact" };
 
 const char *sc_prefilter_mode_name(sc_prefilter_mode m)

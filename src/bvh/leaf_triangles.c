@@ -2,6 +2,7 @@
  * (leaf_block.h), with their conservative prefilter spheres when the mode
  * (or, for auto, the per-leaf rule of sc_bvh.h) asks for them. The only
  * step of the build that knows triangles. */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,6 +35,73 @@ static void leaf_spheres(const bvh_builder *B, const sc_bnode *leaf, sc_sphere_k
         sc_prefilter_sphere_f(vtx(B, t, 0), vtx(B, t, 1), vtx(B, t, 2), kind, SC_METHOD_TEXTBOOK, &s);
         out[i] = s.c[0], out[W + i] = s.c[1], out[2 * W + i] = s.c[2], out[3 * W + i] = s.r2;
     }
+}
+
+/* Flushes a subnormal to zero: frame values must read the same with DAZ. */
+static float no_subnormal(float x) { return fabsf(x) < FLT_MIN ? 0.0f : x; }
+
+/* The compact summary of a leaf (leaf_block.h): minimal spheres quantised
+ * against the leaf's box. Each sphere is re-padded around its decoded
+ * centre, so rounding the centre to 8 bits only grows the radius. Returns 0
+ * (and writes the never-rejecting summary) when the leaf cannot be encoded:
+ * a non-finite frame or sphere, a subnormal decoded centre. */
+static int leaf_summary(const bvh_builder *B, const sc_bnode *leaf, unsigned W, float *sum)
+{
+    unsigned char *q = (unsigned char *)(sum + 8);
+    float r2need[16];
+    memset(sum, 0, sc_leaf_summary_bytes(W));
+    for (int k = 0; k < 3; k++) {
+        const float lo = leaf->box.lo[k], hi = leaf->box.hi[k];
+        sum[k] = no_subnormal(lo);
+        /* steps of at least 2^-100: q * s is 0 or normal */
+        sum[3 + k] = fmaxf((hi - sum[k]) / 255.0f, 0x1p-100f);
+        if (!isfinite(sum[k]) || !isfinite(sum[3 + k]))
+            goto never;
+    }
+    double rmax = 0;
+    for (unsigned i = 0; i < leaf->b; i++) {
+        uint32_t t = B->ids[leaf->a + i];
+        const float *V[3] = { vtx(B, t, 0), vtx(B, t, 1), vtx(B, t, 2) };
+        sc_spheref s;
+        sc_prefilter_sphere_f(V[0], V[1], V[2], SC_SPHERE_MINIMAL, SC_METHOD_TEXTBOOK, &s);
+        for (int k = 0; k < 3; k++) {
+            double x = isfinite(s.c[k]) ? ((double)s.c[k] - sum[k]) / sum[3 + k] : 0;
+            x = nearbyint(x < 0 ? 0 : x > 255 ? 255 : x);
+            q[k * W + i] = (unsigned char)x;
+            s.c[k] = sum[k] + (float)q[k * W + i] * sum[3 + k];   /* the decoded centre */
+            if (!isfinite(s.c[k]) || (s.c[k] != 0 && fabsf(s.c[k]) < FLT_MIN))
+                goto never;
+        }
+        sc_sphere_make_conservative_f(V[0], V[1], V[2], &s);
+        if (!isfinite(s.r2))
+            goto never;
+        r2need[i] = s.r2;
+        rmax = fmax(rmax, sqrt((double)s.r2));
+    }
+    /* 254 steps reach the largest radius (255 is left for rounding up);
+     * steps of at least 2^-60: r and r * r are normal */
+    sum[6] = fmaxf((float)(rmax / 254 * (1 + 0x1p-20)), 0x1p-60f);
+    if (!isfinite(sum[6]))
+        goto never;
+    for (unsigned i = 0; i < leaf->b; i++) {
+        unsigned qr = (unsigned)ceil(sqrt((double)r2need[i]) / sum[6]);
+        if (qr < 1)
+            qr = 1;
+        for (;; qr++) {
+            if (qr > 255)
+                goto never;
+            const float r = (float)qr * sum[6];
+            if (r * r >= r2need[i])
+                break;
+        }
+        q[3 * W + i] = (unsigned char)qr;
+    }
+    return 1;
+never:
+    memset(sum, 0, sc_leaf_summary_bytes(W));
+    sum[6] = INFINITY;
+    memset(q, 255, 4 * (size_t)W);
+    return 0;
 }
 
 /* The auto rule: fraction of isotropic random lines through the leaf's box
@@ -105,7 +173,7 @@ uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi)
     const sc_bnode *leaf = &B->bn[bi];
     unsigned n = leaf->b, W = sc_leaf_width(n);
     sc_prefilter_mode mode = B->cfg->prefilter;
-    int spheres = mode != SC_PREFILTER_OFF;
+    int spheres = mode != SC_PREFILTER_OFF && mode != SC_PREFILTER_COMPACT;
     _Alignas(64) float sph[4 * 16];   /* passed to sc_reject* as a sphere block */
     if (mode == SC_PREFILTER_AUTO) {
         /* Blocks of 4 and 8 never qualify (a sphere block costs more than
@@ -119,19 +187,22 @@ uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi)
     }
     size_t align = (size_t)W * 4;
     size_t off = (B->leaf_used + align - 1) / align * align;
-    size_t bytes = sc_leaf_bytes(W, spheres);
+    const uint64_t flags = spheres ? SC_REF_SPHERES : mode == SC_PREFILTER_COMPACT ? SC_REF_SUMMARY : 0;
+    size_t bytes = sc_leaf_bytes(W, flags);
     B->leaf_used = off + bytes;
     B->leaves_emitted++;
-    if (spheres) {
+    if (flags) {
         B->leaves_spheres++;
-        B->sphere_used += (size_t)W * 16;
+        B->sphere_used += sc_leaf_head_bytes(W, flags);
     }
     B->sah += (double)box_area(&leaf->box) / B->root_area * leaf_blocks(n);
     if (!B->dry) {
         float *block = (float *)(void *)(B->bvh->leaves + off);
         if (spheres)
             leaf_spheres(B, leaf, mode == SC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL, W, block);
-        float *f = (float *)sc_leaf_rows(block, W, spheres);
+        if (flags & SC_REF_SUMMARY)
+            leaf_summary(B, leaf, W, block);
+        float *f = (float *)sc_leaf_rows(block, W, flags);
         uint32_t *prim = (uint32_t *)sc_leaf_prims(f, W);
         for (unsigned i = 0; i < W; i++) {
             uint32_t t = B->ids[leaf->a + (i < n ? i : n - 1)];
@@ -143,6 +214,6 @@ uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi)
             prim[i] = t;
         }
     }
-    return sc_ref_leaf(off, n, spheres);
+    return sc_ref_leaf(off, n, flags);
 }
 

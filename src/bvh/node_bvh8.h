@@ -11,8 +11,9 @@
  *   0                      empty slot
  *   bit 63 clear           inner node; the value is its byte offset in nodes[]
  *   bit 63 set             leaf; bits 0..47 byte offset in leaves[],
- *                          bits 48..51 count-1, bit 52 spheres present
- *                          (the leaf block itself: leaf_block.h)
+ *                          bits 48..51 count-1, bit 52 a float sphere
+ *                          block present, bit 53 a compact sphere summary
+ *                          present (the leaf block itself: leaf_block.h)
  */
 #ifndef SPHERECULL_BVH_NODE_BVH8_H
 #define SPHERECULL_BVH_NODE_BVH8_H
@@ -30,16 +31,19 @@ _Static_assert(sizeof(sc_bvh_node8) == 256, "node8 is four cache lines");
 
 #define SC_REF_LEAF (1ull << 63)
 #define SC_REF_SPHERES (1ull << 52)
+#define SC_REF_SUMMARY (1ull << 53)
 #define SC_REF_OFFSET_MASK ((1ull << 48) - 1)
 
 static inline int sc_ref_is_leaf(uint64_t r) { return (r & SC_REF_LEAF) != 0; }
 static inline unsigned sc_ref_count(uint64_t r) { return (unsigned)((r >> 48) & 15) + 1; }
 static inline int sc_ref_has_spheres(uint64_t r) { return (r & SC_REF_SPHERES) != 0; }
+static inline int sc_ref_has_summary(uint64_t r) { return (r & SC_REF_SUMMARY) != 0; }
 static inline size_t sc_ref_offset(uint64_t r) { return (size_t)(r & SC_REF_OFFSET_MASK); }
 
-static inline uint64_t sc_ref_leaf(size_t offset, unsigned count, int spheres)
+/* flags: 0, SC_REF_SPHERES or SC_REF_SUMMARY */
+static inline uint64_t sc_ref_leaf(size_t offset, unsigned count, uint64_t flags)
 {
-    return SC_REF_LEAF | (spheres ? SC_REF_SPHERES : 0) | ((uint64_t)(count - 1) << 48) | (uint64_t)offset;
+    return SC_REF_LEAF | flags | ((uint64_t)(count - 1) << 48) | (uint64_t)offset;
 }
 
 /* Maximum depth of the binary build tree (the 8-wide tree is never deeper);

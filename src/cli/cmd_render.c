@@ -41,7 +41,7 @@ static const sc_cli_opt opts[] = {
     [O_EXPOSURE] = { "exposure", 0, "EV", "path: radiance x 2^EV before the sRGB tone map", "0" },
     [O_TRACER] = { "tracer", 0, "NAME", "spherecull (this BVH, the options below) or a tracer of 'compare' "
                                         "(embree, embree-high, spherecull-exact, ...)", "spherecull" },
-    [O_PREFILTER] = { "prefilter", 0, "MODE", "off|circum|minimal|auto", "auto" },
+    [O_PREFILTER] = { "prefilter", 0, "MODE", "off|circum|minimal|auto|compact", "auto" },
     [O_LEAF] = { "leaf", 0, "N", "triangles per BVH leaf, 1.." STR(SC_BVH_MAX_LEAF), "8" },
     [O_THREADS] = { "threads", 0, "N", "render threads", "all" },
     [O_ISA] = { "isa", 0, "ISA", SC_CLI_ISA_VALUES, "auto" },

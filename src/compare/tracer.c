@@ -23,10 +23,12 @@ static const sc_tracer_def all_tracers[] = {
     { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0 },
     { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0 },
     { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0 },
+    { "spherecull-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 0 },
     { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8 },
     { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16 },
     { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16 },
     { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16 },
+    { "spherecull-p16-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 16 },
     { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM },
 #ifdef SC_HAVE_EMBREE
     { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
@@ -84,7 +86,8 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
     t->counted = 1;
     /* auto mixes leaves with and without spheres: the counters cannot tell
      * which triangle tests followed a passed sphere */
-    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL;
+    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL ||
+                  cfg->prefilter == SC_PREFILTER_COMPACT;
     return SC_OK;
 }
 

@@ -462,13 +462,19 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
         {
             const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
             const float *block = sc_leaf_block(bvh->leaves, ref);
-            const float *rows = sc_leaf_rows(block, W, sc_ref_has_spheres(ref));
+            const float *rows = sc_leaf_rows(block, W, ref);
             const uint32_t *prims = sc_leaf_prims(rows, W);
             uint32_t live = (1u << n) - 1;
             if (STATS)
                 st->leaves++;
-            if (c->cone && sc_ref_has_spheres(ref)) {
-                uint32_t cull = PFN(pk_cone_cull)(c, block, W) & live;
+            if (c->cone && (ref & (SC_REF_SPHERES | SC_REF_SUMMARY))) {
+                _Alignas(64) float dec[4 * 16];
+                if (sc_ref_has_summary(ref)) {
+                    if (W < PK)   /* the cull reads PK lanes a row: no uninitialised ones */
+                        __builtin_memset(dec, 0, sizeof dec);
+                    summary_decode(block, W, dec);
+                }
+                uint32_t cull = PFN(pk_cone_cull)(c, sc_ref_has_summary(ref) ? dec : block, W) & live;
                 if (STATS) {
                     /* per ray, as the single-ray counters */
                     const uint64_t rays = (uint64_t)__builtin_popcount(m);

@@ -51,6 +51,14 @@ static inline uint32_t sphere_reject(const sc_ray *ray, const float *blk, unsign
     return k->reject16(ray, (const sc_sphere_block16 *)(const void *)blk);
 }
 
+/* A leaf's compact summary (leaf_block.h): decoded, then the same test. */
+static inline uint32_t summary_reject(const sc_ray *ray, const float *sum, unsigned W)
+{
+    _Alignas(64) float blk[4 * 16];
+    sc_leaf_summary_decode(sum, W, blk);
+    return sphere_reject(ray, blk, W);
+}
+
 static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live,
                                  float tmin, float tmax, int test, float *t, float *te, float *un,
                                  float *vn, float *den)
@@ -100,7 +108,7 @@ sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec
             if (!sc_ref_is_leaf(ref))
                 continue;
             const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
-            const float *rows = sc_leaf_rows(sc_leaf_block(bvh->leaves, ref), W, sc_ref_has_spheres(ref));
+            const float *rows = sc_leaf_rows(sc_leaf_block(bvh->leaves, ref), W, ref);
             float t[16], te[16], un[16], vn[16], den[16];
             unsigned hm = leaf_test(&c, rows, W, (1u << n) - 1, ray->tmin, tmax, test, t, te, un, vn, den);
             if (!hm)

@@ -10,6 +10,7 @@
  *                    node_test_par the same for parallel rays
  *   sphere_reject    one ray against a leaf's sphere block (its own ISA's
  *                    kernel, inlined: no dispatch inside the traversal)
+ *   summary_reject   the same against a leaf's compact summary
  *   leaf_test        one leaf block -> hit mask + t, barycentric numerators,
  *                    denominators; for SC_TRI_EXACT the mask of lanes left
  *                    to sc_exact_resolve and per lane the float t's error bound
@@ -95,13 +96,14 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
         {
             const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
             const float *block = sc_leaf_block(bvh->leaves, ref);
-            const float *rows = sc_leaf_rows(block, W, sc_ref_has_spheres(ref));
+            const float *rows = sc_leaf_rows(block, W, ref);
             unsigned live = (1u << n) - 1;
             if (STATS)
                 st->leaves++;
-            if (sc_ref_has_spheres(ref)) {
+            if (ref & (SC_REF_SPHERES | SC_REF_SUMMARY)) {
                 cur.tmax = tmax;
-                uint32_t rej = sphere_reject(&cur, block, W) & live;
+                uint32_t rej = (sc_ref_has_spheres(ref) ? sphere_reject(&cur, block, W)
+                                                        : summary_reject(&cur, block, W)) & live;
                 if (STATS) {
                     st->sphere_tests += n;
                     st->sphere_rejects += (uint64_t)__builtin_popcount(rej);

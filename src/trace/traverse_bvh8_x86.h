@@ -62,6 +62,43 @@ SC_X86_INLINE uint32_t sphere_reject(const sc_ray *ray, const float *blk, unsign
     return sphere_reject16(ray, (const sc_sphere_block16 *)(const void *)blk);
 }
 
+/* A leaf's compact summary decoded into a sphere block with the
+ * operations of sc_leaf_summary_decode (the same bits), then the same
+ * reject kernel. */
+SC_X86_INLINE __m256 summary_u8x8(const unsigned char *p)
+{
+    return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)p)));
+}
+SC_X86_INLINE void summary_decode(const float *sum, unsigned W, float *blk)
+{
+    const unsigned char *q = (const unsigned char *)(sum + 8);
+    if (W == 4) {
+        for (unsigned k = 0; k < 4; k++) {
+            int32_t b;
+            __builtin_memcpy(&b, q + 4 * k, 4);
+            __m128 x = _mm_cvtepi32_ps(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(b)));
+            x = k < 3 ? _mm_add_ps(_mm_set1_ps(sum[k]), _mm_mul_ps(x, _mm_set1_ps(sum[3 + k])))
+                      : _mm_mul_ps(x, _mm_set1_ps(sum[6]));
+            _mm_store_ps(blk + 4 * k, k < 3 ? x : _mm_mul_ps(x, x));
+        }
+        return;
+    }
+    for (unsigned h = 0; h < W; h += 8) {
+        for (unsigned k = 0; k < 3; k++)
+            _mm256_store_ps(blk + k * W + h, _mm256_add_ps(_mm256_set1_ps(sum[k]),
+                                                           _mm256_mul_ps(summary_u8x8(q + k * W + h),
+                                                                         _mm256_set1_ps(sum[3 + k]))));
+        const __m256 r = _mm256_mul_ps(summary_u8x8(q + 3 * W + h), _mm256_set1_ps(sum[6]));
+        _mm256_store_ps(blk + 3 * W + h, _mm256_mul_ps(r, r));
+    }
+}
+SC_X86_INLINE uint32_t summary_reject(const sc_ray *ray, const float *sum, unsigned W)
+{
+    _Alignas(64) float blk[4 * 16];
+    summary_decode(sum, W, blk);
+    return sphere_reject(ray, blk, W);
+}
+
 SC_X86_INLINE unsigned
 leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, float tmin, float tmax,
                int test, float *t, float *te, float *un, float *vn, float *den)
