@@ -16,6 +16,7 @@ packages=(
   assimp-testmodels libcgal-demo       # shipped scenes take meshes from these
   clang libclang-rt-14-dev             # fuzzing (libFuzzer)
   valgrind                             # memcheck in CI
+  libopenmpi-dev openmpi-bin           # mpirun -np N spherecull render (the MPI driver)
 )
 
 missing=()

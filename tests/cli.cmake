@@ -11,3 +11,16 @@ if(TARGET spherecull_cli)
            COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/cli_render.sh $<TARGET_FILE:spherecull_cli>
                    ${PROJECT_SOURCE_DIR}/scenes/cornell.json)
 endif()
+# The MPI driver on loopback (tests/mpi.sh: render and compare; skipped,
+# exit 77, without MPI). scripts/test.sh --sanitize builds without MPI.
+if(TARGET spherecull_cli)
+  if(TARGET spherecull_mpi)
+    set(sc_mpi_built 1)
+  else()
+    set(sc_mpi_built 0)
+  endif()
+  add_test(NAME mpi
+           COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/mpi.sh $<TARGET_FILE:spherecull_cli>
+                   ${PROJECT_SOURCE_DIR}/scenes/cornell.json ${sc_mpi_built})
+  set_tests_properties(mpi PROPERTIES SKIP_RETURN_CODE 77 LABELS mpi TIMEOUT 600)
+endif()

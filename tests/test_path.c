@@ -8,7 +8,8 @@
  *     E (1 + rho + ... + rho^B) for B bounces, every emitter found both by
  *     next-event estimation and by bounce rays (multiple importance
  *     sampling: a wrong weight biases the sum);
- *   - the same image for 1 and 2 threads and two runs; the same radiance
+ *   - the same image for 1 and 2 threads and two runs, and when the tiles
+ *     are split between two calls (sc_render_tiles); the same radiance
  *     through a single-ray back end as through the stream calls; and, when
  *     Embree is built, the same radiance through Embree except at pixels
  *     whose paths passed near a triangle edge;
@@ -297,6 +298,108 @@ static void test_deterministic(void **state)
     sc_scene_free(s);
 }
 
+/* sc_render_tiles, as the MPI driver uses it: two calls stand for two
+ * processes, one rendering the even tiles, the other the odd ones; the
+ * second's combine adds the first's buffers. Its image is the one of a
+ * single call, bit for bit, for the path tracer and for the depth view
+ * (whose scale comes from every pixel); a status combine returns is what
+ * sc_render returns. */
+typedef struct {
+    int next;                 /* the next tile this "process" takes (steps of 2) */
+    float *color, *value;     /* the first process's buffers, kept */
+    size_t pixels;
+    sc_status verdict;        /* what combine answers */
+    int combines;
+} split_tiles;
+
+static int split_next(void *ctx)
+{
+    split_tiles *t = ctx;
+    return __atomic_fetch_add(&t->next, 2, __ATOMIC_RELAXED);
+}
+
+static split_tiles *split_first;   /* the first process's state, for the second's combine */
+
+static sc_status split_combine(void *ctx, sc_status local, float *color, float *value, size_t pixels,
+                               sc_render_stats *stats)
+{
+    split_tiles *t = ctx;
+    (void)stats;
+    t->combines++;
+    if (local != SC_OK || t->verdict != SC_OK)
+        return local != SC_OK ? local : t->verdict;
+    if (t == split_first) {
+        t->color = malloc(pixels * 3 * sizeof(float));
+        t->value = malloc(pixels * sizeof(float));
+        assert_non_null(t->color);
+        assert_non_null(t->value);
+        memcpy(t->color, color, pixels * 3 * sizeof(float));
+        memcpy(t->value, value, pixels * sizeof(float));
+        t->pixels = pixels;
+        return SC_OK;
+    }
+    assert_int_equal(pixels, split_first->pixels);
+    for (size_t i = 0; i < 3 * pixels; i++)
+        color[i] += split_first->color[i];
+    for (size_t i = 0; i < pixels; i++)
+        value[i] += split_first->value[i];
+    return SC_OK;
+}
+
+static void test_tiles_hook(void **state)
+{
+    (void)state;
+    sc_scene *s = load_json(room);
+    sc_bvh *bvh = build(s);
+    sc_scene_view v;
+    sc_scene_get_view(s, &v);
+    for (int view = 0; view < 2; view++) {
+        sc_render_options o;
+        if (view == 0) {
+            path_options(&o, 2, 3);
+        } else {
+            sc_render_options_init(&o);
+            o.debug = SC_RENDER_DEPTH;
+        }
+        sc_image whole = { 0 }, part[2] = { { 0 }, { 0 } };
+        assert_int_equal(sc_render(&v, bvh, &o, &whole, NULL), SC_OK);
+        split_tiles t[2] = { { .next = 0 }, { .next = 1 } };
+        split_first = &t[0];
+        for (int p = 0; p < 2; p++) {
+            sc_render_tiles hook = { split_next, split_combine, &t[p] };
+            o.tiles = &hook;
+            assert_int_equal(sc_render(&v, bvh, &o, &part[p], NULL), SC_OK);
+            assert_int_equal(t[p].combines, 1);
+        }
+        size_t n = (size_t)whole.width * (size_t)whole.height * 3;
+        /* the first "process" alone has holes; both together are the image */
+        assert_true(memcmp(part[0].rgb, whole.rgb, n) != 0);
+        assert_memory_equal(part[1].rgb, whole.rgb, n);
+        free(t[0].color);
+        free(t[0].value);
+        sc_image_free(&whole);
+        sc_image_free(&part[0]);
+        sc_image_free(&part[1]);
+    }
+    /* a failure elsewhere: combine's verdict is the render's */
+    sc_render_options o;
+    path_options(&o, 1, 1);
+    split_tiles bad = { .next = 0, .verdict = SC_ERR_IO };
+    split_first = NULL;
+    sc_render_tiles hook = { split_next, split_combine, &bad };
+    o.tiles = &hook;
+    sc_image img = { 0 };
+    assert_int_equal(sc_render(&v, bvh, &o, &img, NULL), SC_ERR_IO);
+    assert_int_equal(bad.combines, 1);
+    assert_null(img.rgb);
+    /* a hook without its functions is refused */
+    sc_render_tiles empty = { NULL, NULL, NULL };
+    o.tiles = &empty;
+    assert_int_equal(sc_render(&v, bvh, &o, &img, NULL), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_free(bvh);
+    sc_scene_free(s);
+}
+
 /* A back end of single-ray calls: another code path to the same answers. */
 static sc_status one_closest(void *ctx, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent)
 {
@@ -448,6 +551,7 @@ int main(void)
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_emissive_sphere),
         cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_tiles_hook),
         cmocka_unit_test(test_backend_single_rays),
 #ifdef SC_HAVE_EMBREE
         cmocka_unit_test(test_backend_embree),

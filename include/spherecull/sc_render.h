@@ -83,6 +83,30 @@ typedef struct sc_render_backend {
     void *ctx;
 } sc_render_backend;
 
+typedef struct sc_render_stats sc_render_stats;
+
+/* Optional: which tiles this process renders, and how the partial images of
+ * several processes meet (the MPI driver of `spherecull render` is one;
+ * NULL: every tile here). Tiles are 16 x 16 pixels, row-major, numbered from
+ * 0. next returns the next tile to render, or -1 when none is left; it is
+ * called from every render thread, so it must be thread-safe. combine is
+ * called exactly once per sc_render call that passed its argument checks,
+ * also after a failure or a cancel (local_status says which; a failure
+ * before the loop passes NULL buffers), from one thread, with this process's
+ * accumulators: pixels * 3 floats of colour and pixels floats of the
+ * per-pixel value of the depth and heat views; pixels of tiles rendered
+ * elsewhere hold 0 in both. It must leave in them the sum over the processes
+ * (exact: every pixel is nonzero in one process at most) and in *stats the
+ * summed counters, and return the status agreed by all (SC_OK only if every
+ * process succeeded). The image is then the one a single process renders,
+ * bit for bit. opt->edge is filled for this process's tiles only. */
+typedef struct sc_render_tiles {
+    int (*next)(void *ctx);
+    sc_status (*combine)(void *ctx, sc_status local_status, float *color, float *value, size_t pixels,
+                         sc_render_stats *stats);
+    void *ctx;
+} sc_render_tiles;
+
 typedef struct sc_render_options {
     sc_render_debug debug;   /* DIRECT only */
     int ao_samples;          /* 0: constant ambient term */
@@ -115,16 +139,18 @@ typedef struct sc_render_options {
      * blockers count too: the same image, more time. */
     float *radiance;
     uint8_t *edge;
+    /* Distributed rendering (see sc_render_tiles above); NULL: all tiles. */
+    const sc_render_tiles *tiles;
 } sc_render_options;
 
 #define SC_RENDER_EDGE_BARY 1e-5
 
-typedef struct sc_render_stats {
+struct sc_render_stats {
     uint64_t primary_rays, shadow_rays, ao_rays;
     uint64_t bounce_rays;    /* PATH: rays after the camera ray */
     double seconds;          /* wall time of the render loop */
     sc_trace_stats trace;    /* summed over all rays; zero unless opt->trace_stats */
-} sc_render_stats;
+};
 
 /* Defaults: direct, shaded, no AO, seed 1, all threads, shadows on; for
  * the path tracer 16 spp, 4 bounces, roulette from 3, exposure 0. */

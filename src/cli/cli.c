@@ -17,8 +17,14 @@
 
 enum { MAX_OPTS = 48, OPT_BASE = 256, HELP_COLUMN = 26 };
 
+static int errors_quiet;
+
+void sc_cli_quiet_errors(int quiet) { errors_quiet = quiet; }
+
 void sc_cli_error(const char *command, const char *fmt, ...)
 {
+    if (errors_quiet)
+        return;
     va_list ap;
     va_start(ap, fmt);
     fprintf(stderr, "spherecull: %s: ", command);
@@ -228,22 +234,34 @@ int sc_cli_int_list(const char *cmd, const char *opt, const char *s, int lo, int
     return -1;
 }
 
-int sc_cli_load_mesh(const char *cmd, const char *spec, sc_scene **scene, sc_scene_view *v, sc_mesh_view *mesh)
+int sc_cli_load_mesh_msg(const char *spec, sc_scene **scene, sc_scene_view *v, sc_mesh_view *mesh, char *err,
+                         size_t errlen)
 {
-    char err[512] = "";
-    sc_status st = sc_scene_load(spec, NULL, scene, err, sizeof err);
+    err[0] = 0;
+    sc_status st = sc_scene_load(spec, NULL, scene, err, errlen);
     if (st != SC_OK) {
-        sc_cli_error(cmd, "%s", err[0] ? err : sc_strerror(st));
+        if (!err[0])
+            snprintf(err, errlen, "%s", sc_strerror(st));
         return 1;
     }
     sc_scene_get_view(*scene, v);
     if (v->mesh.triangle_count == 0 || v->mesh.triangle_count > UINT32_MAX || v->mesh.vertex_count > UINT32_MAX) {
-        sc_cli_error(cmd, "%s: %zu triangles: nothing to trace, or too many", spec, v->mesh.triangle_count);
+        snprintf(err, errlen, "%s: %zu triangles: nothing to trace, or too many", spec, v->mesh.triangle_count);
         sc_scene_free(*scene);
         *scene = NULL;
         return 1;
     }
     *mesh = (sc_mesh_view){ v->mesh.positions, (uint32_t)v->mesh.vertex_count, v->mesh.indices, (uint32_t)v->mesh.triangle_count, 0, 0 };
+    return 0;
+}
+
+int sc_cli_load_mesh(const char *cmd, const char *spec, sc_scene **scene, sc_scene_view *v, sc_mesh_view *mesh)
+{
+    char err[512];
+    if (sc_cli_load_mesh_msg(spec, scene, v, mesh, err, sizeof err) != 0) {
+        sc_cli_error(cmd, "%s", err);
+        return 1;
+    }
     return 0;
 }
 

@@ -46,6 +46,9 @@ void sc_cli_help(const sc_cli_cmd *cmd, FILE *f);
 
 /* One line "spherecull: <command>: <message>" on stderr. */
 void sc_cli_error(const char *command, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* 1: sc_cli_error prints nothing (MPI ranks other than 0, for errors every
+ * rank finds alike, so that one line is printed, not one per rank). */
+void sc_cli_quiet_errors(int quiet);
 
 /* Checks, before any work is done, that an output file can be written:
  * PATH is absent or a regular file, and its folder exists and accepts a new
@@ -66,6 +69,9 @@ struct sc_scene_view;
 struct sc_mesh_view;
 int sc_cli_load_mesh(const char *cmd, const char *spec, struct sc_scene **scene, struct sc_scene_view *v,
                      struct sc_mesh_view *mesh);
+/* The same, the error line (without the command) in err instead of on stderr. */
+int sc_cli_load_mesh_msg(const char *spec, struct sc_scene **scene, struct sc_scene_view *v,
+                         struct sc_mesh_view *mesh, char *err, size_t errlen);
 
 /* Value parsers: 0 on success, else an error line naming OPT and -1. */
 int sc_cli_int(const char *cmd, const char *opt, const char *s, long lo, long hi, long *out);

@@ -7,6 +7,9 @@
 #include <string.h>
 
 #include "cli.h"
+#ifdef SC_HAVE_MPI
+#include "mpi/sc_mpi.h"
+#endif
 #include "common/sc_names.h"
 #include "compare/compare.h"
 #include "compare/tracer.h"
@@ -195,8 +198,115 @@ static int compare_scene(const char *spec, const sc_cmp_options *opt, sc_cmp_row
     return 0;
 }
 
+#ifdef SC_HAVE_MPI
+/* Under mpirun: the work items (scene x ray set, in the single process's
+ * order) dealt round-robin to the ranks; each rank loads the scenes of its
+ * items and times them under the node lock (sc_mpi.h); rank 0 gathers the
+ * rows in the single process's order. Returns 0 or the exit status; on
+ * rank 0 *rows holds every row. */
+static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
+{
+    const int rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
+    sc_mpi_node_lock *lock = NULL;
+    if (sc_mpi_node_lock_new(mpi, &lock) != SC_OK) {
+        if (rank == 0)
+            sc_cli_error(CMD, "cannot set up the node's timing lock (/dev/shm or /tmp)");
+        return 1;
+    }
+    sc_cmp_options opt = a->opt;
+    opt.timing = sc_mpi_node_lock_timing;
+    opt.timing_ctx = lock;
+    sc_cmp_rows mine = { 0 };
+    int *items = NULL;
+    size_t items_cap = 0;
+    char err[512] = "", loaded_err[600] = "";
+    sc_status st = SC_OK;
+    int item = 0, loaded = -1;
+    sc_scene *scene = NULL;
+    sc_scene_view v;
+    sc_mesh_view mesh;
+    for (int s = 0; s < a->nscenes && st == SC_OK; s++) {
+        const char *base = strrchr(a->scenes[s], '/');
+        base = base ? base + 1 : a->scenes[s];
+        for (int k = 0; k < SC_RAYS_KIND_COUNT && st == SC_OK; k++) {
+            if (!(a->opt.ray_kinds & (1u << k)))
+                continue;
+            if (item++ % size != rank)
+                continue;
+            if (loaded != s) {
+                sc_scene_free(scene);
+                scene = NULL;
+                /* the line is printed once, after the ranks agree */
+                if (sc_cli_load_mesh_msg(a->scenes[s], &scene, &v, &mesh, loaded_err, sizeof loaded_err) != 0) {
+                    st = SC_ERR_IO;
+                    break;
+                }
+                loaded = s;
+                if (rank == 0)
+                    fprintf(stderr, "%s: %zu triangles\n", base, v.mesh.triangle_count);
+            }
+            opt.ray_kinds = 1u << k;
+            size_t before = mine.count;
+            st = sc_cmp_scene(base, &mesh, &v.camera, v.lights, v.num_lights, &opt, &mine, rank == 0 ? stderr : NULL,
+                              err, sizeof err);
+            if (st != SC_OK) {
+                snprintf(loaded_err, sizeof loaded_err, "%s", err[0] ? err : sc_strerror(st));
+                break;
+            }
+            if (mine.count > items_cap) {
+                size_t cap = mine.cap > 16 ? mine.cap : 16;
+                int *p = realloc(items, cap * sizeof *items);
+                if (!p) {
+                    st = SC_ERR_OUT_OF_MEMORY;
+                    snprintf(loaded_err, sizeof loaded_err, "out of memory");
+                    break;
+                }
+                items = p, items_cap = cap;
+            }
+            for (size_t i = before; i < mine.count; i++)
+                items[i] = item - 1;
+        }
+    }
+    sc_scene_free(scene);
+    sc_mpi_node_lock_free(lock);
+    int first;
+    if (sc_mpi_agree(mpi, st, &first) != SC_OK) {
+        if (first == rank) {
+            sc_cli_quiet_errors(0);
+            sc_cli_error(CMD, "%s", loaded_err);
+        }
+        free(items);
+        sc_cmp_rows_free(&mine);
+        return 1;
+    }
+    st = sc_mpi_gather_rows(mpi, &mine, items, rows);
+    free(items);
+    sc_cmp_rows_free(&mine);
+    if (st != SC_OK) {
+        if (rank == 0)
+            sc_cli_error(CMD, "gathering the rows failed: %s", sc_strerror(st));
+        return 1;
+    }
+    return 0;
+}
+#endif
+
+/* The rank an MPI launcher gave this process, -1 without one. */
+static int launched_rank(void)
+{
+#ifdef SC_HAVE_MPI
+    return sc_mpi_launched_rank();
+#else
+    return getenv("OMPI_COMM_WORLD_RANK") || getenv("PMIX_RANK") || getenv("PMI_RANK") ? 0 : -1;
+#endif
+}
+
 static int run(int argc, char **argv)
 {
+    /* ranks other than 0 keep quiet about what every rank finds alike */
+    const int launched = launched_rank();
+    if (launched > 0)
+        sc_cli_quiet_errors(1);
     args a;
     memset(&a, 0, sizeof a);
     sc_cmp_options_default(&a.opt);
@@ -209,17 +319,50 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0 || sc_cli_check_output(CMD, "--json", a.json) != 0)
         return 1;
+    int rank = 0, size = 1;
+#ifdef SC_HAVE_MPI
+    sc_mpi *mpi = NULL;
+    if (launched >= 0) {
+        char merr[256];
+        if (sc_mpi_init(&argc, &argv, &mpi, merr, sizeof merr) != SC_OK) {
+            sc_cli_error(CMD, "%s", merr);
+            return 1;
+        }
+        rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
+    }
+#else
+    if (launched >= 0) {
+        sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
+                          "(install libopenmpi-dev and rebuild, or run it without mpirun)");
+        return 2;
+    }
+#endif
     /* The yardstick, named in the output and in every row. */
     char embree_build[128] = "";
 #ifdef SC_HAVE_EMBREE
-    if (sc_embree_version(embree_build, sizeof embree_build) == SC_OK)
+    if (sc_embree_version(embree_build, sizeof embree_build) == SC_OK && rank == 0)
         printf("embree: %s\n", embree_build);
 #endif
     a.opt.embree_build = embree_build;
-    printf("timing: MXCSR %s in every timed thread, each timed run >= %.2f s\n",
-           a.opt.ftz ? "flush-to-zero + denormals-are-zero" : "default", a.opt.min_seconds);
+    if (rank == 0) {
+        printf("timing: MXCSR %s in every timed thread, each timed run >= %.2f s\n",
+               a.opt.ftz ? "flush-to-zero + denormals-are-zero" : "default", a.opt.min_seconds);
+        if (size > 1)
+            printf("mpi: %d ranks; work items (scene x ray set) dealt round-robin; one timed block at a time per node\n",
+                   size);
+    }
     fflush(stdout);
     sc_cmp_rows rows = { 0 };
+#ifdef SC_HAVE_MPI
+    if (mpi) {
+        rc = compare_distributed(mpi, &a, &rows);
+        sc_mpi_finalize(mpi);
+        if (rank != 0) {
+            sc_cmp_rows_free(&rows);
+            return rc;
+        }
+    } else
+#endif
     for (int s = 0; s < a.nscenes && rc == 0; s++)
         rc = compare_scene(a.scenes[s], &a.opt, &rows);
     if (rc == 0) {

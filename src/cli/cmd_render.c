@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,8 +18,21 @@
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_render.h"
 #include "spherecull/sc_scene.h"
+#ifdef SC_HAVE_MPI
+#include "mpi/sc_mpi.h"
+#endif
 
 #define CMD "render"
+
+/* The rank an MPI launcher gave this process, -1 without one. */
+static int sc_mpi_launched_rank_or_none(void)
+{
+#ifdef SC_HAVE_MPI
+    return sc_mpi_launched_rank();
+#else
+    return getenv("OMPI_COMM_WORLD_RANK") || getenv("PMIX_RANK") || getenv("PMI_RANK") ? 0 : -1;
+#endif
+}
 
 #define STR_(x) #x
 #define STR(x) STR_(x)
@@ -244,8 +258,49 @@ static int apply_camera(const args *a, sc_scene *scene)
     return 0;
 }
 
+/* Where this process stands: one process (rank 0 of 1, no MPI), or a rank
+ * of an MPI job started by mpirun. */
+typedef struct dist {
+    int rank, size;
+#ifdef SC_HAVE_MPI
+    sc_mpi *mpi;
+#endif
+} dist;
+
+static int render_scene(const args *a, dist *d);
+
+/* Under an MPI launcher every rank loads and builds the scene, rank 0 hands
+ * out tiles and writes the PNG (sc_mpi.h); otherwise one process renders. */
+static int distributed(const args *a, int argc, char **argv)
+{
+    dist d;
+    memset(&d, 0, sizeof d);
+    d.size = 1;
+    if (sc_mpi_launched_rank_or_none() < 0)
+        return render_scene(a, &d);
+#ifdef SC_HAVE_MPI
+    char err[256];
+    if (sc_mpi_init(&argc, &argv, &d.mpi, err, sizeof err) != SC_OK) {
+        sc_cli_error(CMD, "%s", err);
+        return 1;
+    }
+    d.rank = sc_mpi_rank(d.mpi), d.size = sc_mpi_size(d.mpi);
+    int rc = render_scene(a, &d);
+    sc_mpi_finalize(d.mpi);
+    return rc;
+#else
+    (void)argc, (void)argv;
+    sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
+                      "(install libopenmpi-dev and rebuild, or run it without mpirun)");
+    return 2;
+#endif
+}
+
 static int run(int argc, char **argv)
 {
+    /* ranks other than 0 keep quiet about what every rank finds alike */
+    if (sc_mpi_launched_rank_or_none() > 0)
+        sc_cli_quiet_errors(1);
     args a = { .out = "render.png", .tracer = "spherecull", .leaf = 8, .seed = 1, .shadows = 1, .spp = 16,
                .bounces = 4, .prefilter = SC_PREFILTER_AUTO, .tri = SC_TRI_WATERTIGHT,
                .debug = SC_RENDER_SHADED, .integrator = SC_RENDER_DIRECT };
@@ -267,7 +322,39 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "output", a.out) != 0)
         return 1;
+    return distributed(&a, argc, argv);
+}
 
+/* A status every rank reaches: 0 if all succeeded; else 1, and the lowest
+ * failing rank prints fmt (NULL: it has said so already). One process: the
+ * local status. */
+static int agreed(dist *d, sc_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int agreed(dist *d, sc_status st, const char *fmt, ...)
+{
+    int first = st == SC_OK ? -1 : d->rank;
+#ifdef SC_HAVE_MPI
+    if (d->mpi)
+        sc_mpi_agree(d->mpi, st, &first);
+#endif
+    if (first < 0)
+        return 0;
+    if (first == d->rank && fmt) {
+        char line[1200];
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(line, sizeof line, fmt, ap);
+        va_end(ap);
+        sc_cli_quiet_errors(0);
+        sc_cli_error(CMD, "%s", line);
+    }
+    return 1;
+}
+
+static int render_scene(const args *ap, dist *d)
+{
+    args a = *ap;
+    int rc;
+    const int ours = strcmp(a.tracer, "spherecull") == 0;
     sc_scene_options so;
     sc_scene_options_init(&so);
     so.max_triangles = a.max_tris;
@@ -275,14 +362,13 @@ static int run(int argc, char **argv)
     char err[1024];
     sc_scene *scene = NULL;
     sc_status st = sc_scene_load(a.scene, &so, &scene, err, sizeof err);
-    if (st != SC_OK) {
-        sc_cli_error(CMD, "%s", err);
+    if (agreed(d, st, "%s", err))
         return 1;
-    }
+    /* the same on every rank: only rank 0 speaks */
     rc = apply_camera(&a, scene);
-    if (rc) {
+    if (agreed(d, rc ? SC_ERR_INVALID_ARGUMENT : SC_OK, NULL)) {
         sc_scene_free(scene);
-        return rc;
+        return rc ? rc : 1;
     }
     sc_scene_view view;
     sc_scene_get_view(scene, &view);
@@ -302,8 +388,8 @@ static int run(int argc, char **argv)
         cfg.tri_test = a.tri;
         cfg.threads = (int)a.threads;   /* 0 (the default): every CPU, as the render */
         st = sc_bvh_build(&view.mesh, &cfg, &bvh);
-        if (st != SC_OK) {
-            sc_cli_error(CMD, "building the BVH failed: %s", sc_strerror(st));
+        if (agreed(d, st, "building the BVH failed: %s", sc_strerror(st))) {
+            sc_bvh_free(bvh);
             sc_scene_free(scene);
             return 1;
         }
@@ -315,8 +401,9 @@ static int run(int argc, char **argv)
         st = sc_mesh_check(&view.mesh, &cm);
         if (st == SC_OK)
             st = sc_tracer_build(&tracer, sc_tracer_find(a.tracer), &cm);
-        if (st != SC_OK) {
-            sc_cli_error(CMD, "building tracer %s failed: %s", a.tracer, sc_strerror(st));
+        if (agreed(d, st, "building tracer %s failed: %s", a.tracer, sc_strerror(st))) {
+            if (st == SC_OK)
+                sc_tracer_free(&tracer);
             sc_scene_free(scene);
             return 1;
         }
@@ -340,7 +427,21 @@ static int run(int argc, char **argv)
     ro.backend = ours ? NULL : &backend.backend;
     ro.cancel = (const volatile int *)&interrupted;
     progress prog = { sc_now_seconds(), 0 };
-    if (!a.quiet && isatty(STDERR_FILENO)) {
+#ifdef SC_HAVE_MPI
+    sc_render_tiles hook;
+    sc_mpi_tiles *tiles = NULL;
+    if (d->mpi) {
+        if (agreed(d, sc_mpi_tiles_new(d->mpi, &tiles, &hook), "setting up the tile counter failed")) {
+            sc_bvh_free(bvh);
+            if (!ours)
+                sc_tracer_free(&tracer);
+            sc_scene_free(scene);
+            return 1;
+        }
+        ro.tiles = &hook;
+    }
+#endif
+    if (!a.quiet && d->rank == 0 && isatty(STDERR_FILENO)) {
         ro.progress = on_progress;
         ro.progress_ctx = &prog;
     }
@@ -353,9 +454,28 @@ static int run(int argc, char **argv)
     sc_render_stats rs;
     st = sc_render(&view, bvh, &ro, &img, &rs);
     sigaction(SIGINT, &old, NULL);
+    char shares[256] = "";
+#ifdef SC_HAVE_MPI
+    if (tiles && d->rank == 0 && st == SC_OK) {
+        /* how the tiles were shared, and what assembling the image cost */
+        const uint64_t *rr = sc_mpi_tiles_rank_rays(tiles);
+        uint64_t all = 0;
+        for (int i = 0; i < d->size; i++)
+            all += rr[i];
+        size_t n = (size_t)snprintf(shares, sizeof shares, " (rays per rank");
+        for (int i = 0; i < d->size && i < 16 && n < sizeof shares; i++)
+            n += (size_t)snprintf(shares + n, sizeof shares - n, "%s%.0f%%", i ? " / " : " ",
+                                  all ? 100.0 * (double)rr[i] / (double)all : 0.0);
+        if (n < sizeof shares)
+            snprintf(shares + n, sizeof shares - n, "; gather %.1f ms)", 1e3 * sc_mpi_tiles_combine_seconds(tiles));
+    }
+    sc_mpi_tiles_free(tiles);
+#endif
     if (ro.progress)
         fputs("\r\033[K", stderr);
-    if (st == SC_OK) {
+    if (d->rank != 0) {
+        /* the image is complete on rank 0 only, which writes and reports */
+    } else if (st == SC_OK) {
         st = sc_png_write(a.out, &img, err, sizeof err);
         if (st != SC_OK)
             sc_cli_error(CMD, "%s", err);
@@ -364,7 +484,7 @@ static int run(int argc, char **argv)
     } else {
         sc_cli_error(CMD, "rendering failed: %s", sc_strerror(st));
     }
-    if (st == SC_OK && !a.quiet) {
+    if (st == SC_OK && !a.quiet && d->rank == 0) {
         sc_scene_stats ss;
         sc_scene_get_stats(scene, &ss);
         printf("%s: %zu triangles (scene %.1f B/tri), ", a.scene, ss.triangles, ss.bytes_per_triangle);
@@ -378,7 +498,10 @@ static int run(int argc, char **argv)
         printf(", %s, %.2f M rays in %.3f s = %.2f Mrays/s%s", sc_render_integrator_name(a.integrator),
                (double)rays * 1e-6, rs.seconds, rs.seconds > 0 ? (double)rays * 1e-6 / rs.seconds : 0.0,
                a.stats ? " (with counters)" : "");
-        printf(" -> %s (%dx%d)\n", a.out, img.width, img.height);
+        printf(" -> %s (%dx%d)", a.out, img.width, img.height);
+        if (d->size > 1)
+            printf(", %d MPI ranks%s", d->size, shares);
+        printf("\n");
         if (a.stats && rs.trace.rays) {
             double n = (double)rs.trace.rays;
             printf("per ray: %.2f nodes, %.2f leaves, %.2f sphere tests (%.1f%% rejected), %.2f triangle tests, %.3f hits"

@@ -256,9 +256,14 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
          * small set is not timed over a few milliseconds of a noisy VM; the
          * first run (untimed for the result) measures how many that is. */
         double first;
+        if (opt->timing)
+            opt->timing(opt->timing_ctx, 1);
         sc_status st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &first);
-        if (st != SC_OK)
+        if (st != SC_OK) {
+            if (opt->timing)
+                opt->timing(opt->timing_ctx, 0);
             return st;
+        }
         int loops = 1;
         if (opt->min_seconds > 0 && first < opt->min_seconds)
             loops = first > 0 ? (int)ceil(opt->min_seconds / first) : 1000;
@@ -270,11 +275,17 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
                 double s;
                 st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &s);
                 if (st != SC_OK)
-                    return st;
+                    break;
                 sum += s;
             }
+            if (st != SC_OK)
+                break;
             times[i] = sum / loops;
         }
+        if (opt->timing)
+            opt->timing(opt->timing_ctx, 0);
+        if (st != SC_OK)
+            return st;
         qsort(times, (size_t)reps, sizeof times[0], sc_cmp_double);
         sc_cmp_row *row = row_add(out);
         if (!row)

@@ -30,6 +30,11 @@ typedef struct sc_cmp_options {
     double min_seconds;                 /* each timed repeat runs its set until this long (>= 0) */
     int ftz;                            /* 1: FTZ|DAZ in every timed thread, ours and Embree's */
     const char *embree_build;           /* the Embree in use ("3.13.5 /path"), copied to rows; may be NULL */
+    /* Optional: called around every timed block of runs, with 1 before and 0
+     * after (the MPI driver keeps the other ranks on the node quiet then);
+     * NULL: nothing. */
+    void (*timing)(void *ctx, int begin);
+    void *timing_ctx;
 } sc_cmp_options;
 
 void sc_cmp_options_default(sc_cmp_options *o);

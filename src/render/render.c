@@ -286,6 +286,15 @@ static uint8_t encode_srgb(double linear)
     return (uint8_t)lrint(255.0 * e);
 }
 
+/* A failure before the tile loop: the other processes of a distributed
+ * render still wait in combine, so this one reports there (no buffers). */
+static sc_status tiles_failed(const sc_render_options *opt, sc_status st)
+{
+    if (opt->tiles)
+        opt->tiles->combine(opt->tiles->ctx, st, NULL, NULL, 0, NULL);
+    return st;
+}
+
 static int options_ok(const sc_render_options *o, const sc_bvh *bvh)
 {
     if ((unsigned)o->debug >= SC_RENDER_DEBUG_COUNT || o->ao_samples < 0 || o->ao_samples > 4096 ||
@@ -294,6 +303,8 @@ static int options_ok(const sc_render_options *o, const sc_bvh *bvh)
     if (!bvh && (!o->backend || o->debug == SC_RENDER_HEAT || o->trace_stats))
         return 0;
     if (o->backend && (!o->backend->closest || !o->backend->occluded || o->debug == SC_RENDER_HEAT))
+        return 0;
+    if (o->tiles && (!o->tiles->next || !o->tiles->combine))
         return 0;
     if (o->integrator == SC_RENDER_PATH &&
         (o->spp < 1 || o->spp > 65536 || o->bounces < 0 || o->bounces > 64 || o->rr_depth < 1 ||
@@ -352,26 +363,27 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
 
     sc_status st = path ? sc_path_prepare(rc) : SC_OK;
     if (st != SC_OK)
-        return st;
+        return tiles_failed(opt, st);
     st = sc_image_alloc(out, w, h);
     if (st != SC_OK) {
         sc_path_release(rc);
-        return st;
+        return tiles_failed(opt, st);
     }
     size_t npx = (size_t)w * (size_t)h;
-    c.accum = malloc(npx * 3 * sizeof(float));
-    c.value = malloc(npx * sizeof(float));
+    /* zeroed: the pixels of tiles another process renders stay 0 (sc_render_tiles) */
+    c.accum = calloc(npx * 3, sizeof(float));
+    c.value = calloc(npx, sizeof(float));
     if (!c.accum || !c.value) {
         free(c.accum);
         free(c.value);
         sc_path_release(rc);
         sc_image_free(out);
-        return SC_ERR_OUT_OF_MEMORY;
+        return tiles_failed(opt, SC_ERR_OUT_OF_MEMORY);
     }
     const int tx = (w + TILE - 1) / TILE, ty = (h + TILE - 1) / TILE, ntiles = tx * ty;
     sc_render_stats total;
     memset(&total, 0, sizeof total);
-    int done = 0, failed = 0, cancelled = 0;
+    int done = 0, failed = 0, cancelled = 0, next_tile = 0;
     uint64_t rays_done = 0;
     double t0 = sc_now_seconds();
 #ifdef _OPENMP
@@ -388,11 +400,18 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
 #endif
             failed = 1;
         }
+        for (;;) {
+            int tile, stop;
+            if (opt->tiles) {
+                tile = opt->tiles->next(opt->tiles->ctx);
+            } else {
 #ifdef _OPENMP
-#pragma omp for schedule(dynamic, 1)
+#pragma omp atomic capture
 #endif
-        for (int tile = 0; tile < ntiles; tile++) {
-            int stop;
+                tile = next_tile++;
+            }
+            if (tile < 0 || tile >= ntiles)
+                break;
 #ifdef _OPENMP
 #pragma omp atomic read
 #endif
@@ -405,7 +424,7 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
                 cancelled = 1;
             }
             if (stop)
-                continue;   /* an OpenMP loop cannot break: the rest are skipped */
+                break;
             uint64_t before = local.primary_rays + local.shadow_rays + local.ao_rays + local.bounce_rays;
             int x0 = (tile % tx) * TILE, y0 = (tile / tx) * TILE;
             int x1 = x0 + TILE < w ? x0 + TILE : w, y1 = y0 + TILE < h ? y0 + TILE : h;
@@ -435,7 +454,8 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
 #else
             if (opt->progress)
 #endif
-                opt->progress(opt->progress_ctx, (double)d / ntiles, r);
+                /* handed out elsewhere too: the share of all tiles handed out */
+                opt->progress(opt->progress_ctx, (double)(opt->tiles ? tile + 1 : d) / ntiles, r);
         }
         sc_path_work_free(work);
 #ifdef _OPENMP
@@ -449,13 +469,16 @@ sc_status sc_render(const sc_scene_view *v, const sc_bvh *bvh, const sc_render_o
             add_stats(&total.trace, &local.trace);
         }
     }
-    total.seconds = sc_now_seconds() - t0;
     sc_path_release(rc);
-    if (failed || cancelled) {
+    st = failed ? SC_ERR_OUT_OF_MEMORY : cancelled ? SC_ERR_CANCELLED : SC_OK;
+    if (opt->tiles)
+        st = opt->tiles->combine(opt->tiles->ctx, st, c.accum, c.value, npx, &total);
+    total.seconds = sc_now_seconds() - t0;
+    if (st != SC_OK) {
         free(c.accum);
         free(c.value);
         sc_image_free(out);
-        return failed ? SC_ERR_OUT_OF_MEMORY : SC_ERR_CANCELLED;
+        return st;
     }
 
     if (path) {
