@@ -7,6 +7,7 @@
 # mid-render leaves no PNG. `mpirun -np N spherecull compare`: the CSV
 # equals the single-process one apart from the timing columns (2 and 3
 # ranks), and a rank that cannot load a scene fails the job with one line.
+# Other commands (bench) refuse to run as N copies.
 #
 #   tests/mpi.sh SPHERECULL CORNELL_JSON MPI_BUILT(0|1)
 set -u
@@ -103,5 +104,14 @@ rc=$?
 [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] || no "compare, a rank without its scene: exit status $rc (124 = hung)"
 [ "$(grep -c '^spherecull:' err.txt)" -eq 1 ] || no "compare, a rank without its scene: $(grep -c '^spherecull:' err.txt) lines of ours"
 [ "$fail" = "$before" ] && echo "ok    compare, a rank without its scene: exit $rc, one line: $(grep '^spherecull:' err.txt)"
+
+# A command that does not share its work refuses to run as N copies.
+timeout 60 mpirun -np 2 "$S" bench "$C" > out.txt 2> err.txt
+rc=$?
+if [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] && [ "$(grep -c '^spherecull:' err.txt)" -eq 1 ]; then
+  echo "ok    bench under mpirun: refused, one line: $(grep '^spherecull:' err.txt)"
+else
+  no "bench under mpirun: exit status $rc, $(grep -c '^spherecull:' err.txt) lines of ours"
+fi
 
 exit $fail

@@ -21,6 +21,21 @@ static int errors_quiet;
 
 void sc_cli_quiet_errors(int quiet) { errors_quiet = quiet; }
 
+int sc_cli_mpi_rank(void)
+{
+    static const char *const vars[] = { "OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK" };
+    for (size_t i = 0; i < sizeof vars / sizeof vars[0]; i++) {
+        const char *v = getenv(vars[i]);
+        if (v && *v) {
+            char *end;
+            long r = strtol(v, &end, 10);
+            if (*end == 0 && r >= 0 && r < 1L << 30)
+                return (int)r;
+        }
+    }
+    return -1;
+}
+
 void sc_cli_error(const char *command, const char *fmt, ...)
 {
     if (errors_quiet)

@@ -26,6 +26,7 @@ typedef struct sc_cli_cmd {
     const sc_cli_opt *opts;
     int nopts;
     int (*run)(int argc, char **argv);   /* argv[0] is the command name */
+    int mpi;                 /* 1: shares its work across MPI ranks under mpirun */
 } sc_cli_cmd;
 
 extern const sc_cli_cmd sc_cli_accuracy, sc_cli_bench, sc_cli_bench_render, sc_cli_bench_spheres, sc_cli_compare, sc_cli_raster,
@@ -49,6 +50,12 @@ void sc_cli_error(const char *command, const char *fmt, ...) __attribute__((form
 /* 1: sc_cli_error prints nothing (MPI ranks other than 0, for errors every
  * rank finds alike, so that one line is printed, not one per rank). */
 void sc_cli_quiet_errors(int quiet);
+
+/* The rank an MPI launcher gave this process (Open MPI's
+ * OMPI_COMM_WORLD_RANK, PMIx's PMIX_RANK, PMI's PMI_RANK), or -1 when no
+ * launcher started it. Read from the environment, so known before MPI_Init
+ * and in builds without MPI. */
+int sc_cli_mpi_rank(void);
 
 /* Checks, before any work is done, that an output file can be written:
  * PATH is absent or a regular file, and its folder exists and accepts a new

@@ -291,20 +291,10 @@ static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
 }
 #endif
 
-/* The rank an MPI launcher gave this process, -1 without one. */
-static int launched_rank(void)
-{
-#ifdef SC_HAVE_MPI
-    return sc_mpi_launched_rank();
-#else
-    return getenv("OMPI_COMM_WORLD_RANK") || getenv("PMIX_RANK") || getenv("PMI_RANK") ? 0 : -1;
-#endif
-}
-
 static int run(int argc, char **argv)
 {
     /* ranks other than 0 keep quiet about what every rank finds alike */
-    const int launched = launched_rank();
+    const int launched = sc_cli_mpi_rank();
     if (launched > 0)
         sc_cli_quiet_errors(1);
     args a;
@@ -413,4 +403,5 @@ const sc_cli_cmd sc_cli_compare = {
     .opts = opts,
     .nopts = SC_NAMES_COUNT(opts),
     .run = run,
+    .mpi = 1,
 };

@@ -24,16 +24,6 @@
 
 #define CMD "render"
 
-/* The rank an MPI launcher gave this process, -1 without one. */
-static int sc_mpi_launched_rank_or_none(void)
-{
-#ifdef SC_HAVE_MPI
-    return sc_mpi_launched_rank();
-#else
-    return getenv("OMPI_COMM_WORLD_RANK") || getenv("PMIX_RANK") || getenv("PMI_RANK") ? 0 : -1;
-#endif
-}
-
 #define STR_(x) #x
 #define STR(x) STR_(x)
 
@@ -276,7 +266,7 @@ static int distributed(const args *a, int argc, char **argv)
     dist d;
     memset(&d, 0, sizeof d);
     d.size = 1;
-    if (sc_mpi_launched_rank_or_none() < 0)
+    if (sc_cli_mpi_rank() < 0)
         return render_scene(a, &d);
 #ifdef SC_HAVE_MPI
     char err[256];
@@ -299,7 +289,7 @@ static int distributed(const args *a, int argc, char **argv)
 static int run(int argc, char **argv)
 {
     /* ranks other than 0 keep quiet about what every rank finds alike */
-    if (sc_mpi_launched_rank_or_none() > 0)
+    if (sc_cli_mpi_rank() > 0)
         sc_cli_quiet_errors(1);
     args a = { .out = "render.png", .tracer = "spherecull", .leaf = 8, .seed = 1, .shadows = 1, .spp = 16,
                .bounces = 4, .prefilter = SC_PREFILTER_AUTO, .tri = SC_TRI_WATERTIGHT,
@@ -535,4 +525,5 @@ const sc_cli_cmd sc_cli_render = {
     .opts = opts,
     .nopts = SC_NAMES_COUNT(opts),
     .run = run,
+    .mpi = 1,
 };

@@ -55,6 +55,14 @@ int main(int argc, char **argv)
         return 0;
     }
     const sc_cli_cmd *c = find(a);
+    if (c && !c->mpi && sc_cli_mpi_rank() >= 0) {
+        /* N copies of a command that does not share its work would time
+         * each other and write the same files */
+        if (sc_cli_mpi_rank() == 0)
+            fprintf(stderr, "spherecull: %s: not under mpirun: only render and compare share their work across "
+                            "ranks (docs/scale-out.md)\n", c->name);
+        return 2;
+    }
     if (c)
         return c->run(argc - 1, argv + 1);
     fprintf(stderr, "spherecull: unknown command '%s' (try 'spherecull --help')\n", a);

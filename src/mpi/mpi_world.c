@@ -8,21 +8,6 @@
 #include "sc_mpi.h"
 #include "mpi_internal.h"
 
-int sc_mpi_launched_rank(void)
-{
-    static const char *const vars[] = { "OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK" };
-    for (size_t i = 0; i < sizeof vars / sizeof vars[0]; i++) {
-        const char *v = getenv(vars[i]);
-        if (v && *v) {
-            char *end;
-            long r = strtol(v, &end, 10);
-            if (*end == 0 && r >= 0 && r < 1 << 30)
-                return (int)r;
-        }
-    }
-    return -1;
-}
-
 sc_status sc_mpi_init(int *argc, char ***argv, sc_mpi **out, char *err, size_t errlen)
 {
     *out = NULL;

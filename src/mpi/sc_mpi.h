@@ -19,13 +19,6 @@
 
 typedef struct sc_mpi sc_mpi;
 
-/* The rank an MPI launcher gave this process (read from the environment:
- * Open MPI's OMPI_COMM_WORLD_RANK, PMIx's PMIX_RANK, PMI's PMI_RANK), or -1
- * when no launcher started it: then the commands run as one process and
- * never initialise MPI. Known before MPI_Init, so that ranks other than 0
- * can stay quiet about errors every rank finds alike (bad options). */
-int sc_mpi_launched_rank(void);
-
 /* MPI_Init_thread at MPI_THREAD_SERIALIZED (the render threads take turns
  * through a mutex). On error *out is NULL and err holds one line. */
 sc_status sc_mpi_init(int *argc, char ***argv, sc_mpi **out, char *err, size_t errlen);
