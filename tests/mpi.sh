@@ -7,7 +7,8 @@
 # mid-render leaves no PNG. `mpirun -np N spherecull compare`: the CSV
 # equals the single-process one apart from the timing columns (2 and 3
 # ranks), and a rank that cannot load a scene fails the job with one line.
-# Other commands (bench) refuse to run as N copies.
+# `mpirun -np N spherecull bench`: the CSV equals the single-process one
+# apart from the timing columns. Other commands refuse to run as N copies.
 #
 #   tests/mpi.sh SPHERECULL CORNELL_JSON MPI_BUILT(0|1)
 set -u
@@ -105,13 +106,34 @@ rc=$?
 [ "$(grep -c '^spherecull:' err.txt)" -eq 1 ] || no "compare, a rank without its scene: $(grep -c '^spherecull:' err.txt) lines of ours"
 [ "$fail" = "$before" ] && echo "ok    compare, a rank without its scene: exit $rc, one line: $(grep '^spherecull:' err.txt)"
 
+# bench: the same CSV as one process, apart from what timing decides.
+notime_bench() {
+  awk 'BEGIN { FS = "," }
+       NR == 1 { for (i = 1; i <= NF; i++) drop[i] = ($i ~ /^(mrays|embree_mrays|ratio|cycle_ratio|build_ms)$/) }
+       { line = ""; for (i = 1; i <= NF; i++) if (!drop[i]) line = line (line == "" ? "" : ",") $i; print line }' "$1"
+}
+benchargs="$C proc:sphere:3000 --rays primary,shadow,diffuse,random --threads 1 --leaf 4,8 --prefilter off,compact
+           --repeats 1 --count 1500 --size 48x36"
+before=$fail
+# shellcheck disable=SC2086
+"$S" bench $benchargs --csv b1.csv > b1.txt 2>&1 || no "bench, one process: exit status $?"
+notime_bench b1.csv > b1.cut
+for n in 2 3; do
+  # shellcheck disable=SC2086
+  mp "$n" bench $benchargs --csv "b$n.csv" > "b$n.txt" 2>&1 || { no "bench, $n ranks: exit status $?"; continue; }
+  notime_bench "b$n.csv" > "b$n.cut"
+  cmp -s b1.cut "b$n.cut" || { no "bench, $n ranks: the CSV differs from one process's beyond timing"; diff b1.cut "b$n.cut" | head -5; }
+done
+[ "$(wc -l < b1.cut)" -gt 20 ] || no "bench: only $(wc -l < b1.cut) lines in the CSV"
+[ "$fail" = "$before" ] && echo "ok    bench: 1 process = 2 ranks = 3 ranks, $(($(wc -l < b1.cut) - 1)) rows apart from timing"
+
 # A command that does not share its work refuses to run as N copies.
-timeout 60 mpirun -np 2 "$S" bench "$C" > out.txt 2> err.txt
+timeout 60 mpirun -np 2 "$S" bench-spheres > out.txt 2> err.txt
 rc=$?
 if [ "$rc" -ne 0 ] && [ "$rc" -ne 124 ] && [ "$(grep -c '^spherecull:' err.txt)" -eq 1 ]; then
-  echo "ok    bench under mpirun: refused, one line: $(grep '^spherecull:' err.txt)"
+  echo "ok    bench-spheres under mpirun: refused, one line: $(grep '^spherecull:' err.txt)"
 else
-  no "bench under mpirun: exit status $rc, $(grep -c '^spherecull:' err.txt) lines of ours"
+  no "bench-spheres under mpirun: exit status $rc, $(grep -c '^spherecull:' err.txt) lines of ours"
 fi
 
 exit $fail

@@ -10,6 +10,9 @@
 #include <unistd.h>
 
 #include "cli.h"
+#ifdef SC_HAVE_MPI
+#include "mpi/sc_mpi.h"
+#endif
 #include "common/sc_atomic_file.h"
 #include "common/sc_csv.h"
 #include "common/sc_names.h"
@@ -214,6 +217,14 @@ static void print_row(void *ctx, const sc_bench_row *r)
     fputc('\n', p->csv);
 }
 
+static void print_footer(const sc_bench_options *o)
+{
+    printf("# ratio: our Mrays/s over Embree's, median of %d paired repeats; cyc-r: the same from user-mode\n"
+           "# cycles (1 thread); nodes..hits: per ray; sph%%: leaves with spheres; diff: rays whose hit\n"
+           "# differs from Embree's (another primitive at another t, or occlusion)\n",
+           o->repeats);
+}
+
 static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_fd, FILE *csv)
 {
     sc_scene *scene;
@@ -230,12 +241,154 @@ static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_f
         sc_cli_error(CMD, "%s: %s", spec, err[0] ? err : sc_strerror(st));
         return 1;
     }
-    printf("# ratio: our Mrays/s over Embree's, median of %d paired repeats; cyc-r: the same from user-mode\n"
-           "# cycles (1 thread); nodes..hits: per ray; sph%%: leaves with spheres; diff: rays whose hit\n"
-           "# differs from Embree's (another primitive at another t, or occlusion)\n",
-           o->repeats);
+    print_footer(o);
     return 0;
 }
+
+#ifdef SC_HAVE_MPI
+/* What one rank measured: the scene summary and the rows of each of its
+ * work items, tagged with the item. */
+typedef struct collect {
+    int item;
+    sc_bench_scene *scenes;
+    int *scene_items;
+    size_t nscenes;
+    sc_bench_row *rows;
+    int *row_items;
+    size_t nrows;
+    int oom;
+} collect;
+
+static int grow(void **p, size_t n, size_t size)
+{
+    /* doubling at powers of two */
+    if (n & (n - 1))
+        return 0;
+    void *q = realloc(*p, (n ? 2 * n : 1) * size);
+    if (!q)
+        return -1;
+    *p = q;
+    return 0;
+}
+
+static void collect_scene(void *ctx, const sc_bench_scene *sc)
+{
+    collect *c = ctx;
+    if (grow((void **)&c->scenes, c->nscenes, sizeof *c->scenes) ||
+        grow((void **)&c->scene_items, c->nscenes, sizeof *c->scene_items)) {
+        c->oom = 1;
+        return;
+    }
+    c->scenes[c->nscenes] = *sc;
+    c->scene_items[c->nscenes++] = c->item;
+}
+
+static void collect_row(void *ctx, const sc_bench_row *r)
+{
+    collect *c = ctx;
+    if (grow((void **)&c->rows, c->nrows, sizeof *c->rows) ||
+        grow((void **)&c->row_items, c->nrows, sizeof *c->row_items)) {
+        c->oom = 1;
+        return;
+    }
+    c->rows[c->nrows] = *r;
+    c->row_items[c->nrows++] = c->item;
+}
+
+/* Under mpirun: the work items (scene x leaf size x prefilter mode, in the
+ * single process's order) dealt round-robin; each rank times its items
+ * under the node lock (sc_mpi.h); rank 0 prints and writes everything in
+ * the single process's order. */
+static int bench_distributed(sc_mpi *mpi, const args *a, int cycles_fd, FILE *csv)
+{
+    const int rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
+    sc_mpi_node_lock *lock = NULL;
+    if (sc_mpi_node_lock_new(mpi, &lock) != SC_OK) {
+        if (rank == 0)
+            sc_cli_error(CMD, "cannot set up the node's timing lock (/dev/shm or /tmp)");
+        return 1;
+    }
+    sc_bench_options o = a->o;
+    o.timing = sc_mpi_node_lock_timing;
+    o.timing_ctx = lock;
+    o.nleaves = o.nmodes = 1;
+    const int per = a->o.nleaves * a->o.nmodes;
+    collect c;
+    memset(&c, 0, sizeof c);
+    sc_bench_sink sink = { collect_scene, collect_row, &c };
+    char err[512] = "", line[700] = "";
+    sc_status st = SC_OK;
+    int loaded = -1;
+    sc_scene *scene = NULL;
+    sc_scene_view v;
+    sc_mesh_view mesh;
+    for (int item = 0; item < a->nscenes * per && st == SC_OK; item++) {
+        if (item % size != rank)
+            continue;
+        const int s = item / per, li = item % per / a->o.nmodes, mi = item % a->o.nmodes;
+        if (loaded != s) {
+            sc_scene_free(scene);
+            scene = NULL;
+            if (sc_cli_load_mesh_msg(a->scenes[s], &scene, &v, &mesh, line, sizeof line) != 0) {
+                st = SC_ERR_IO;
+                break;
+            }
+            loaded = s;
+        }
+        o.leaves[0] = a->o.leaves[li];
+        o.modes[0] = a->o.modes[mi];
+        c.item = item;
+        st = sc_bench_run(&mesh, &v.camera, v.lights, v.num_lights, &o, cycles_fd, &sink, err, sizeof err);
+        if (st == SC_OK && c.oom)
+            st = SC_ERR_OUT_OF_MEMORY;
+        if (st != SC_OK)
+            snprintf(line, sizeof line, "%s: %s", a->scenes[s], err[0] ? err : sc_strerror(st));
+    }
+    sc_scene_free(scene);
+    sc_mpi_node_lock_free(lock);
+    int first, rc = 0;
+    void *scenes = NULL, *rows = NULL;
+    size_t nscenes = 0, nrows = 0;
+    if (sc_mpi_agree(mpi, st, &first) != SC_OK) {
+        if (first == rank) {
+            sc_cli_quiet_errors(0);
+            sc_cli_error(CMD, "%s", line);
+        }
+        rc = 1;
+    } else if (sc_mpi_gather_items(mpi, c.scenes, c.nscenes, sizeof *c.scenes, c.scene_items, &scenes, &nscenes) !=
+                   SC_OK ||
+               sc_mpi_gather_items(mpi, c.rows, c.nrows, sizeof *c.rows, c.row_items, &rows, &nrows) != SC_OK) {
+        if (rank == 0)
+            sc_cli_error(CMD, "gathering the results failed");
+        rc = 1;
+    } else if (rank == 0) {
+        /* every item reports its scene once and nkinds x nthreads rows, so
+         * the records of scene s start at s * per items */
+        const sc_bench_scene *sc = scenes;
+        const sc_bench_row *row = rows;
+        const size_t items = (size_t)a->nscenes * (size_t)per, rows_per = (size_t)a->o.nkinds * (size_t)a->o.nthreads;
+        if (nscenes != items || nrows != items * rows_per) {
+            sc_cli_error(CMD, "the ranks returned %zu scenes and %zu rows, not %zu and %zu", nscenes, nrows, items,
+                         items * rows_per);
+            rc = 1;
+        }
+        for (int s = 0; s < a->nscenes && rc == 0; s++) {
+            printer p = { a->scenes[s], &a->o, csv, { 0 } };
+            print_scene(&p, &sc[(size_t)s * (size_t)per]);
+            for (size_t r = (size_t)s * per * rows_per; r < (size_t)(s + 1) * per * rows_per; r++)
+                print_row(&p, &row[r]);
+            print_footer(&a->o);
+        }
+    }
+    free(scenes);
+    free(rows);
+    free(c.scenes);
+    free(c.scene_items);
+    free(c.rows);
+    free(c.row_items);
+    return rc;
+}
+#endif
 
 /* What the benchmark runs on, before any number. */
 static void print_machine(const sc_bench_options *o, int cycles_fd)
@@ -271,6 +424,10 @@ static void print_machine(const sc_bench_options *o, int cycles_fd)
 
 static int run(int argc, char **argv)
 {
+    /* ranks other than 0 keep quiet about what every rank finds alike */
+    const int launched = sc_cli_mpi_rank();
+    if (launched > 0)
+        sc_cli_quiet_errors(1);
     args a;
     memset(&a, 0, sizeof a);
     sc_bench_options_default(&a.o);
@@ -283,12 +440,36 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0)
         return 1;
+    int rank = 0;
+#ifdef SC_HAVE_MPI
+    sc_mpi *mpi = NULL;
+    if (launched >= 0) {
+        char merr[256];
+        if (sc_mpi_init(&argc, &argv, &mpi, merr, sizeof merr) != SC_OK) {
+            sc_cli_error(CMD, "%s", merr);
+            return 1;
+        }
+        rank = sc_mpi_rank(mpi);
+    }
+#else
+    if (launched >= 0) {
+        sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
+                          "(install libopenmpi-dev and rebuild, or run it without mpirun)");
+        return 2;
+    }
+#endif
     int cycles_fd = sc_bench_cycles_open();
 #ifdef SC_HAVE_EMBREE
     if (sc_embree_version(embree_build, sizeof embree_build) != SC_OK)
         snprintf(embree_build, sizeof embree_build, "%s (headers; no device)", RTC_VERSION_STRING);
 #endif
-    print_machine(&a.o, cycles_fd);
+    if (rank == 0)
+        print_machine(&a.o, cycles_fd);
+#ifdef SC_HAVE_MPI
+    if (mpi && rank == 0 && sc_mpi_size(mpi) > 1)
+        printf("# mpi: %d ranks; work items (scene x leaf x prefilter mode) dealt round-robin; one timed block at "
+               "a time per node\n", sc_mpi_size(mpi));
+#endif
     char *text = NULL;
     size_t len = 0;
     FILE *csv = open_memstream(&text, &len);
@@ -300,6 +481,11 @@ static int run(int argc, char **argv)
                      "embree_total_bytes_per_tri,sphere_leaf_pct,mrays,embree_mrays,ratio,cycle_ratio,nodes,leaves,"
                      "sphere_tests,sphere_rejects,tri_tests,tri_hits,reject_rate,leaf_count,leaves_with_spheres,"
                      "build_ms,diff_embree,diff_brute,embree_build\n");
+#ifdef SC_HAVE_MPI
+        if (mpi)
+            rc = bench_distributed(mpi, &a, cycles_fd, csv);
+        else
+#endif
         for (int s = 0; s < a.nscenes && rc == 0; s++)
             rc = bench_scene(a.scenes[s], &a.o, cycles_fd, csv);
         if (fclose(csv) != 0 && rc == 0) {
@@ -309,7 +495,10 @@ static int run(int argc, char **argv)
     }
     if (cycles_fd >= 0)
         close(cycles_fd);
-    if (rc == 0 && a.csv && sc_write_atomic_bytes(a.csv, text, len) != 0) {
+#ifdef SC_HAVE_MPI
+    sc_mpi_finalize(mpi);
+#endif
+    if (rc == 0 && a.csv && rank == 0 && sc_write_atomic_bytes(a.csv, text, len) != 0) {
         sc_cli_error(CMD, "cannot write %s: %s", a.csv, strerror(errno));
         rc = 1;
     }
@@ -330,4 +519,5 @@ const sc_cli_cmd sc_cli_bench = {
     .opts = opts,
     .nopts = SC_NAMES_COUNT(opts),
     .run = run,
+    .mpi = 1,
 };

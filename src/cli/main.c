@@ -59,8 +59,8 @@ int main(int argc, char **argv)
         /* N copies of a command that does not share its work would time
          * each other and write the same files */
         if (sc_cli_mpi_rank() == 0)
-            fprintf(stderr, "spherecull: %s: not under mpirun: only render and compare share their work across "
-                            "ranks (docs/scale-out.md)\n", c->name);
+            fprintf(stderr, "spherecull: %s: not under mpirun: only render, compare and bench share their work "
+                            "across ranks (docs/scale-out.md)\n", c->name);
         return 2;
     }
     if (c)

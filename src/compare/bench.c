@@ -217,6 +217,8 @@ static void time_pairs(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, co
     double t_o[SC_BENCH_MAX_REPEATS], t_e[SC_BENCH_MAX_REPEATS], ratio[SC_BENCH_MAX_REPEATS],
         cratio[SC_BENCH_MAX_REPEATS];
     const int emb = c->emb.handle != NULL, fd = c->cycles_fd;
+    if (c->o->timing)
+        c->o->timing(c->o->timing_ctx, 1);
     run(t, kind, rs, c, thr, NULL);          /* warm-up */
     if (emb)
         run(&c->emb, kind, rs, c, thr, NULL);
@@ -240,6 +242,8 @@ static void time_pairs(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, co
         ratio[i] = te / to;
         cratio[i] = co ? (double)ce / (double)co : NAN;
     }
+    if (c->o->timing)
+        c->o->timing(c->o->timing_ctx, 0);
     r->threads = thr;
     r->mrays = (double)rs->count / sc_median(t_o, reps) * 1e-6;
     r->embree_mrays = (double)rs->count / sc_median(t_e, reps) * 1e-6;

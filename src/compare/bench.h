@@ -31,6 +31,10 @@ typedef struct sc_bench_options {
     float trav_cost;                               /* < 0: the builder's default */
     sc_tri_test tri;
     int packet;                                    /* 0: single rays; 8, 16: packets (Embree's too) */
+    /* Optional: called around every timed block (1 before, 0 after), as
+     * sc_cmp_options.timing; NULL: nothing. */
+    void (*timing)(void *ctx, int begin);
+    void *timing_ctx;
 } sc_bench_options;
 
 void sc_bench_options_default(sc_bench_options *o);

@@ -1,5 +1,5 @@
-/* compare over MPI (sc_mpi.h): the node-local timing lock and the gather
- * of the ranks' rows. */
+/* compare and bench over MPI (sc_mpi.h): the node-local timing lock and
+ * the gather of the ranks' records in the single process's order. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <fcntl.h>
@@ -92,11 +92,11 @@ void sc_mpi_node_lock_free(sc_mpi_node_lock *l)
 
 typedef struct {
     int item, rank, index;
-} row_key;
+} rec_key;
 
 static int key_cmp(const void *a, const void *b)
 {
-    const row_key *x = a, *y = b;
+    const rec_key *x = a, *y = b;
     if (x->item != y->item)
         return x->item < y->item ? -1 : 1;
     if (x->rank != y->rank)
@@ -104,13 +104,14 @@ static int key_cmp(const void *a, const void *b)
     return (x->index > y->index) - (x->index < y->index);
 }
 
-sc_status sc_mpi_gather_rows(sc_mpi *m, const sc_cmp_rows *mine, const int *items, sc_cmp_rows *all)
+sc_status sc_mpi_gather_items(sc_mpi *m, const void *recs, size_t n, size_t size, const int *items, void **all,
+                              size_t *all_n)
 {
-    if (mine->count > (size_t)INT_MAX / sizeof(sc_cmp_row))
-        return SC_ERR_LIMIT;
-    int n = (int)mine->count;
+    if (size == 0 || n > (size_t)INT_MAX / size)
+        return sc_mpi_agree(m, SC_ERR_LIMIT, NULL);
+    int cnt = (int)n;
     int *counts = NULL, *displs = NULL, *bcounts = NULL, *bdispls = NULL, total = 0;
-    sc_cmp_row *rows = NULL;
+    char *bytes = NULL;
     int *ritems = NULL;
     sc_status st = SC_OK;
     if (m->rank == 0) {
@@ -123,43 +124,49 @@ sc_status sc_mpi_gather_rows(sc_mpi *m, const sc_cmp_rows *mine, const int *item
     }
     if ((st = sc_mpi_agree(m, st, NULL)) != SC_OK)
         goto out;
-    MPI_Gather(&n, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    MPI_Gather(&cnt, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
     if (m->rank == 0) {
-        for (int r = 0; r < m->size; r++) {
-            displs[r] = total;
-            bdispls[r] = total * (int)sizeof(sc_cmp_row);
-            bcounts[r] = counts[r] * (int)sizeof(sc_cmp_row);
-            total += counts[r];
+        size_t sum = 0;
+        for (int r = 0; r < m->size; r++)
+            sum += (size_t)counts[r];
+        if (sum > (size_t)INT_MAX / size) {
+            st = SC_ERR_LIMIT;
+        } else {
+            for (int r = 0; r < m->size; r++) {
+                displs[r] = total;
+                bdispls[r] = total * (int)size;
+                bcounts[r] = counts[r] * (int)size;
+                total += counts[r];
+            }
+            bytes = malloc(((size_t)total + 1) * size);
+            ritems = malloc(((size_t)total + 1) * sizeof *ritems);
+            if (!bytes || !ritems)
+                st = SC_ERR_OUT_OF_MEMORY;
         }
-        rows = malloc(((size_t)total + 1) * sizeof *rows);
-        ritems = malloc(((size_t)total + 1) * sizeof *ritems);
-        if (!rows || !ritems)
-            st = SC_ERR_OUT_OF_MEMORY;
     }
     if ((st = sc_mpi_agree(m, st, NULL)) != SC_OK)
         goto out;
-    /* the same binary on every rank (replicated data): rows travel as bytes */
-    MPI_Gatherv(mine->rows, n * (int)sizeof(sc_cmp_row), MPI_BYTE, rows, bcounts, bdispls, MPI_BYTE, 0,
-                MPI_COMM_WORLD);
-    MPI_Gatherv(items, n, MPI_INT, ritems, counts, displs, MPI_INT, 0, MPI_COMM_WORLD);
+    /* the same binary on every rank (replicated data): records travel as bytes */
+    MPI_Gatherv(recs, cnt * (int)size, MPI_BYTE, bytes, bcounts, bdispls, MPI_BYTE, 0, MPI_COMM_WORLD);
+    MPI_Gatherv(items, cnt, MPI_INT, ritems, counts, displs, MPI_INT, 0, MPI_COMM_WORLD);
     if (m->rank == 0) {
-        row_key *keys = malloc(((size_t)total + 1) * sizeof *keys);
-        all->rows = malloc(((size_t)total + 1) * sizeof *all->rows);
-        if (!keys || !all->rows) {
+        rec_key *keys = malloc(((size_t)total + 1) * sizeof *keys);
+        char *sorted = malloc(((size_t)total + 1) * size);
+        if (!keys || !sorted) {
             free(keys);
-            free(all->rows);
-            all->rows = NULL;
+            free(sorted);
             st = SC_ERR_OUT_OF_MEMORY;
             goto out;
         }
         for (int r = 0, i = 0; r < m->size; r++)
             for (int j = 0; j < counts[r]; j++, i++)
-                keys[i] = (row_key){ ritems[i], r, i };
-        /* the single process's order: by work item, each item's rows as made */
+                keys[i] = (rec_key){ ritems[i], r, i };
+        /* the single process's order: by work item, each item's records as made */
         qsort(keys, (size_t)total, sizeof *keys, key_cmp);
         for (int i = 0; i < total; i++)
-            all->rows[i] = rows[keys[i].index];
-        all->count = all->cap = (size_t)total;
+            memcpy(sorted + (size_t)i * size, bytes + (size_t)keys[i].index * size, size);
+        *all = sorted;
+        *all_n = (size_t)total;
         free(keys);
     }
 out:
@@ -167,7 +174,19 @@ out:
     free(displs);
     free(bcounts);
     free(bdispls);
-    free(rows);
+    free(bytes);
     free(ritems);
+    return st;
+}
+
+sc_status sc_mpi_gather_rows(sc_mpi *m, const sc_cmp_rows *mine, const int *items, sc_cmp_rows *all)
+{
+    void *rows = NULL;
+    size_t n = 0;
+    sc_status st = sc_mpi_gather_items(m, mine->rows, mine->count, sizeof(sc_cmp_row), items, &rows, &n);
+    if (st == SC_OK && m->rank == 0) {
+        all->rows = rows;
+        all->count = all->cap = n;
+    }
     return st;
 }

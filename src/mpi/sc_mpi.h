@@ -49,21 +49,27 @@ double sc_mpi_tiles_combine_seconds(const sc_mpi_tiles *t);
 const uint64_t *sc_mpi_tiles_rank_rays(const sc_mpi_tiles *t);
 
 
-/* compare: work items (scene x ray set) are dealt round-robin; every rank
+/* compare and bench: work items (scene x ray set; scene x leaf size x
+ * prefilter mode) are dealt round-robin; every rank
  * times its own items, so ranks that share a node must not time at once,
  * nor time while another computes. The node lock (ranks of one node found
  * with MPI_Comm_split_type(MPI_COMM_TYPE_SHARED), an flock on a file in
  * /dev/shm named by the node's first rank) is held shared during untimed
- * work and exclusively for a timed block (sc_cmp_options.timing), so a
+ * work and exclusively for a timed block (sc_cmp_options.timing,
+ * sc_bench_options.timing), so a
  * timed block runs alone on its node. Collective (new and free). */
 typedef struct sc_mpi_node_lock sc_mpi_node_lock;
 sc_status sc_mpi_node_lock_new(sc_mpi *m, sc_mpi_node_lock **out);
 void sc_mpi_node_lock_timing(void *ctx, int begin);
 void sc_mpi_node_lock_free(sc_mpi_node_lock *l);
 
-/* Collective: every rank's rows, each tagged with its work item, to rank
- * 0, in the order of a single process (by item, then as made). On rank 0
- * *all is filled (free with sc_cmp_rows_free); elsewhere it is untouched. */
+/* Collective: every rank's n records of size bytes, each tagged with its
+ * work item, to rank 0, in the order of a single process (by item, then
+ * as made). On rank 0 *all (malloc'd, free it) and *all_n are set;
+ * elsewhere they are untouched. sc_mpi_gather_rows: compare's rows
+ * (free with sc_cmp_rows_free). */
+sc_status sc_mpi_gather_items(sc_mpi *m, const void *recs, size_t n, size_t size, const int *items, void **all,
+                              size_t *all_n);
 sc_status sc_mpi_gather_rows(sc_mpi *m, const sc_cmp_rows *mine, const int *items, sc_cmp_rows *all);
 
 #endif
