@@ -74,10 +74,16 @@ else
 fi
 
 # compare: the same rows as one process, apart from what timing decides.
-notime() {   # drops the timing columns, found by name in the header
+# Dropped: the timing columns, found by name in the header, and Embree's
+# bytes per triangle (its builder's allocations depend on how many threads
+# it got, which the load on the machine decides, with or without MPI).
+notime() {
   awk 'BEGIN { FS = "," }
-       NR == 1 { for (i = 1; i <= NF; i++)
-                   drop[i] = ($i ~ /^(mrays_per_s|speed_vs_embree|best_embree|best_embree_tracer|loops|build_s)$/) }
+       NR == 1 { for (i = 1; i <= NF; i++) {
+                   drop[i] = ($i ~ /^(mrays_per_s|speed_vs_embree|best_embree|best_embree_tracer|loops|build_s)$/)
+                   if ($i == "tracer") tc = i
+                   if ($i == "bytes_per_tri") bc = i } }
+       NR > 1 && $tc ~ /^embree/ { $bc = "" }
        { line = ""; for (i = 1; i <= NF; i++) if (!drop[i]) line = line (line == "" ? "" : ",") $i; print line }' "$1"
 }
 tracers=spherecull-off,spherecull-exact
@@ -106,10 +112,12 @@ rc=$?
 [ "$(grep -c '^spherecull:' err.txt)" -eq 1 ] || no "compare, a rank without its scene: $(grep -c '^spherecull:' err.txt) lines of ours"
 [ "$fail" = "$before" ] && echo "ok    compare, a rank without its scene: exit $rc, one line: $(grep '^spherecull:' err.txt)"
 
-# bench: the same CSV as one process, apart from what timing decides.
+# bench: the same CSV as one process, apart from what timing and Embree's
+# thread count decide.
 notime_bench() {
   awk 'BEGIN { FS = "," }
-       NR == 1 { for (i = 1; i <= NF; i++) drop[i] = ($i ~ /^(mrays|embree_mrays|ratio|cycle_ratio|build_ms)$/) }
+       NR == 1 { for (i = 1; i <= NF; i++)
+                   drop[i] = ($i ~ /^(mrays|embree_mrays|ratio|cycle_ratio|build_ms|embree_bvh_bytes_per_tri|embree_total_bytes_per_tri)$/) }
        { line = ""; for (i = 1; i <= NF; i++) if (!drop[i]) line = line (line == "" ? "" : ",") $i; print line }' "$1"
 }
 benchargs="$C proc:sphere:3000 --rays primary,shadow,diffuse,random --threads 1 --leaf 4,8 --prefilter off,compact
