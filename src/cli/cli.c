@@ -10,6 +10,9 @@
 #include <unistd.h>
 
 #include "cli.h"
+#ifdef SC_HAVE_MPI
+#include "mpi/sc_mpi.h"
+#endif
 #include "common/sc_atomic_file.h"
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_rays.h"
@@ -34,6 +37,47 @@ int sc_cli_mpi_rank(void)
         }
     }
     return -1;
+}
+
+int sc_cli_mpi_start(const char *cmd, int *argc, char ***argv, struct sc_mpi **mpi, int *rank, int *size)
+{
+    *mpi = NULL, *rank = 0, *size = 1;
+    if (sc_cli_mpi_rank() < 0)
+        return 0;
+#ifdef SC_HAVE_MPI
+    char err[256];
+    if (sc_mpi_init(argc, argv, mpi, err, sizeof err) != SC_OK) {
+        sc_cli_error(cmd, "%s", err);
+        return 1;
+    }
+    *rank = sc_mpi_rank(*mpi), *size = sc_mpi_size(*mpi);
+    return 0;
+#else
+    (void)argc, (void)argv;
+    sc_cli_error(cmd, "started by an MPI launcher, but this spherecull was built without MPI "
+                      "(install libopenmpi-dev and rebuild, or run it without mpirun)");
+    return 2;
+#endif
+}
+
+int sc_cli_mpi_failed(const char *cmd, struct sc_mpi *mpi, sc_status st, const char *line)
+{
+    int first = st == SC_OK ? -1 : 0, rank = 0;
+#ifdef SC_HAVE_MPI
+    if (mpi) {
+        sc_mpi_agree(mpi, st, &first);
+        rank = sc_mpi_rank(mpi);
+    }
+#else
+    (void)mpi;
+#endif
+    if (first < 0)
+        return 0;
+    if (first == rank && line) {
+        sc_cli_quiet_errors(0);
+        sc_cli_error(cmd, "%s", line);
+    }
+    return 1;
 }
 
 void sc_cli_error(const char *command, const char *fmt, ...)

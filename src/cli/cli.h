@@ -9,6 +9,8 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "spherecull/sc_status.h"
+
 typedef struct sc_cli_opt {
     const char *name;        /* long name, without "--" */
     int short_name;          /* a letter, or 0 */
@@ -56,6 +58,18 @@ void sc_cli_quiet_errors(int quiet);
  * launcher started it. Read from the environment, so known before MPI_Init
  * and in builds without MPI. */
 int sc_cli_mpi_rank(void);
+
+/* Starts MPI when a launcher started this process (sc_cli_mpi_rank() >= 0):
+ * *mpi, *rank and *size are set; without a launcher *mpi = NULL, rank 0,
+ * size 1. Returns 0, or an exit status after one error line (MPI did not
+ * start, or this build has no MPI driver). sc_mpi.h has the rest. */
+struct sc_mpi;
+int sc_cli_mpi_start(const char *cmd, int *argc, char ***argv, struct sc_mpi **mpi, int *rank, int *size);
+
+/* A status every rank reaches (sc_mpi_agree; mpi NULL: the local status):
+ * 0 if every rank succeeded, else 1, and the lowest failing rank prints
+ * line (NULL: it has said so already). */
+int sc_cli_mpi_failed(const char *cmd, struct sc_mpi *mpi, sc_status st, const char *line);
 
 /* Checks, before any work is done, that an output file can be written:
  * PATH is absent or a regular file, and its folder exists and accepts a new

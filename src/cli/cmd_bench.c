@@ -303,11 +303,9 @@ static int bench_distributed(sc_mpi *mpi, const args *a, int cycles_fd, FILE *cs
 {
     const int rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
     sc_mpi_node_lock *lock = NULL;
-    if (sc_mpi_node_lock_new(mpi, &lock) != SC_OK) {
-        if (rank == 0)
-            sc_cli_error(CMD, "cannot set up the node's timing lock (/dev/shm or /tmp)");
+    if (sc_cli_mpi_failed(CMD, mpi, sc_mpi_node_lock_new(mpi, &lock),
+                          rank == 0 ? "cannot set up the node's timing lock (/dev/shm or /tmp)" : NULL))
         return 1;
-    }
     sc_bench_options o = a->o;
     o.timing = sc_mpi_node_lock_timing;
     o.timing_ctx = lock;
@@ -346,14 +344,10 @@ static int bench_distributed(sc_mpi *mpi, const args *a, int cycles_fd, FILE *cs
     }
     sc_scene_free(scene);
     sc_mpi_node_lock_free(lock);
-    int first, rc = 0;
+    int rc = 0;
     void *scenes = NULL, *rows = NULL;
     size_t nscenes = 0, nrows = 0;
-    if (sc_mpi_agree(mpi, st, &first) != SC_OK) {
-        if (first == rank) {
-            sc_cli_quiet_errors(0);
-            sc_cli_error(CMD, "%s", line);
-        }
+    if (sc_cli_mpi_failed(CMD, mpi, st, line)) {
         rc = 1;
     } else if (sc_mpi_gather_items(mpi, c.scenes, c.nscenes, sizeof *c.scenes, c.scene_items, &scenes, &nscenes) !=
                    SC_OK ||
@@ -425,8 +419,7 @@ static void print_machine(const sc_bench_options *o, int cycles_fd)
 static int run(int argc, char **argv)
 {
     /* ranks other than 0 keep quiet about what every rank finds alike */
-    const int launched = sc_cli_mpi_rank();
-    if (launched > 0)
+    if (sc_cli_mpi_rank() > 0)
         sc_cli_quiet_errors(1);
     args a;
     memset(&a, 0, sizeof a);
@@ -440,24 +433,10 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0)
         return 1;
-    int rank = 0;
-#ifdef SC_HAVE_MPI
-    sc_mpi *mpi = NULL;
-    if (launched >= 0) {
-        char merr[256];
-        if (sc_mpi_init(&argc, &argv, &mpi, merr, sizeof merr) != SC_OK) {
-            sc_cli_error(CMD, "%s", merr);
-            return 1;
-        }
-        rank = sc_mpi_rank(mpi);
-    }
-#else
-    if (launched >= 0) {
-        sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
-                          "(install libopenmpi-dev and rebuild, or run it without mpirun)");
-        return 2;
-    }
-#endif
+    int rank, size;
+    struct sc_mpi *mpi;
+    if ((rc = sc_cli_mpi_start(CMD, &argc, &argv, &mpi, &rank, &size)) != 0)
+        return rc;
     int cycles_fd = sc_bench_cycles_open();
 #ifdef SC_HAVE_EMBREE
     if (sc_embree_version(embree_build, sizeof embree_build) != SC_OK)
@@ -465,11 +444,9 @@ static int run(int argc, char **argv)
 #endif
     if (rank == 0)
         print_machine(&a.o, cycles_fd);
-#ifdef SC_HAVE_MPI
-    if (mpi && rank == 0 && sc_mpi_size(mpi) > 1)
+    if (rank == 0 && size > 1)
         printf("# mpi: %d ranks; work items (scene x leaf x prefilter mode) dealt round-robin; one timed block at "
-               "a time per node\n", sc_mpi_size(mpi));
-#endif
+               "a time per node\n", size);
     char *text = NULL;
     size_t len = 0;
     FILE *csv = open_memstream(&text, &len);

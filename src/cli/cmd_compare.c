@@ -208,11 +208,9 @@ static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
 {
     const int rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
     sc_mpi_node_lock *lock = NULL;
-    if (sc_mpi_node_lock_new(mpi, &lock) != SC_OK) {
-        if (rank == 0)
-            sc_cli_error(CMD, "cannot set up the node's timing lock (/dev/shm or /tmp)");
+    if (sc_cli_mpi_failed(CMD, mpi, sc_mpi_node_lock_new(mpi, &lock),
+                          rank == 0 ? "cannot set up the node's timing lock (/dev/shm or /tmp)" : NULL))
         return 1;
-    }
     sc_cmp_options opt = a->opt;
     opt.timing = sc_mpi_node_lock_timing;
     opt.timing_ctx = lock;
@@ -269,12 +267,7 @@ static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
     }
     sc_scene_free(scene);
     sc_mpi_node_lock_free(lock);
-    int first;
-    if (sc_mpi_agree(mpi, st, &first) != SC_OK) {
-        if (first == rank) {
-            sc_cli_quiet_errors(0);
-            sc_cli_error(CMD, "%s", loaded_err);
-        }
+    if (sc_cli_mpi_failed(CMD, mpi, st, loaded_err)) {
         free(items);
         sc_cmp_rows_free(&mine);
         return 1;
@@ -294,8 +287,7 @@ static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
 static int run(int argc, char **argv)
 {
     /* ranks other than 0 keep quiet about what every rank finds alike */
-    const int launched = sc_cli_mpi_rank();
-    if (launched > 0)
+    if (sc_cli_mpi_rank() > 0)
         sc_cli_quiet_errors(1);
     args a;
     memset(&a, 0, sizeof a);
@@ -309,24 +301,10 @@ static int run(int argc, char **argv)
     }
     if (sc_cli_check_output(CMD, "--csv", a.csv) != 0 || sc_cli_check_output(CMD, "--json", a.json) != 0)
         return 1;
-    int rank = 0, size = 1;
-#ifdef SC_HAVE_MPI
-    sc_mpi *mpi = NULL;
-    if (launched >= 0) {
-        char merr[256];
-        if (sc_mpi_init(&argc, &argv, &mpi, merr, sizeof merr) != SC_OK) {
-            sc_cli_error(CMD, "%s", merr);
-            return 1;
-        }
-        rank = sc_mpi_rank(mpi), size = sc_mpi_size(mpi);
-    }
-#else
-    if (launched >= 0) {
-        sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
-                          "(install libopenmpi-dev and rebuild, or run it without mpirun)");
-        return 2;
-    }
-#endif
+    int rank, size;
+    struct sc_mpi *mpi;
+    if ((rc = sc_cli_mpi_start(CMD, &argc, &argv, &mpi, &rank, &size)) != 0)
+        return rc;
     /* The yardstick, named in the output and in every row. */
     char embree_build[128] = "";
 #ifdef SC_HAVE_EMBREE

@@ -248,13 +248,11 @@ static int apply_camera(const args *a, sc_scene *scene)
     return 0;
 }
 
-/* Where this process stands: one process (rank 0 of 1, no MPI), or a rank
- * of an MPI job started by mpirun. */
+/* Where this process stands: one process (rank 0 of 1, mpi NULL), or a
+ * rank of an MPI job started by mpirun. */
 typedef struct dist {
     int rank, size;
-#ifdef SC_HAVE_MPI
-    sc_mpi *mpi;
-#endif
+    struct sc_mpi *mpi;
 } dist;
 
 static int render_scene(const args *a, dist *d);
@@ -264,26 +262,14 @@ static int render_scene(const args *a, dist *d);
 static int distributed(const args *a, int argc, char **argv)
 {
     dist d;
-    memset(&d, 0, sizeof d);
-    d.size = 1;
-    if (sc_cli_mpi_rank() < 0)
-        return render_scene(a, &d);
+    int rc = sc_cli_mpi_start(CMD, &argc, &argv, &d.mpi, &d.rank, &d.size);
+    if (rc)
+        return rc;
+    rc = render_scene(a, &d);
 #ifdef SC_HAVE_MPI
-    char err[256];
-    if (sc_mpi_init(&argc, &argv, &d.mpi, err, sizeof err) != SC_OK) {
-        sc_cli_error(CMD, "%s", err);
-        return 1;
-    }
-    d.rank = sc_mpi_rank(d.mpi), d.size = sc_mpi_size(d.mpi);
-    int rc = render_scene(a, &d);
     sc_mpi_finalize(d.mpi);
-    return rc;
-#else
-    (void)argc, (void)argv;
-    sc_cli_error(CMD, "started by an MPI launcher, but this spherecull was built without MPI "
-                      "(install libopenmpi-dev and rebuild, or run it without mpirun)");
-    return 2;
 #endif
+    return rc;
 }
 
 static int run(int argc, char **argv)
@@ -321,23 +307,14 @@ static int run(int argc, char **argv)
 static int agreed(dist *d, sc_status st, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static int agreed(dist *d, sc_status st, const char *fmt, ...)
 {
-    int first = st == SC_OK ? -1 : d->rank;
-#ifdef SC_HAVE_MPI
-    if (d->mpi)
-        sc_mpi_agree(d->mpi, st, &first);
-#endif
-    if (first < 0)
-        return 0;
-    if (first == d->rank && fmt) {
-        char line[1200];
+    char line[1200] = "";
+    if (st != SC_OK && fmt) {
         va_list ap;
         va_start(ap, fmt);
         vsnprintf(line, sizeof line, fmt, ap);
         va_end(ap);
-        sc_cli_quiet_errors(0);
-        sc_cli_error(CMD, "%s", line);
     }
-    return 1;
+    return sc_cli_mpi_failed(CMD, d->mpi, st, fmt ? line : NULL);
 }
 
 static int render_scene(const args *ap, dist *d)
