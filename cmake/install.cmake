@@ -12,7 +12,7 @@ include(CMakePackageConfigHelpers)
 
 set(sc_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/spherecull)
 set(sc_core_headers sc_api.h sc_version.h sc_status.h sc_isa.h sc_ray.h sc_hit.h sc_mesh.h sc_circumsphere.h
-                    sc_prefilter.h sc_simd.h sc_bvh.h sc_trace.h sc_camera.h sc_rays.h)
+                    sc_prefilter.h sc_simd.h sc_bvh.h sc_trace.h sc_accel.h sc_camera.h sc_rays.h)
 list(TRANSFORM sc_core_headers PREPEND ${PROJECT_SOURCE_DIR}/include/spherecull/)
 
 # ---- core ---------------------------------------------------------------------

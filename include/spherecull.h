@@ -35,6 +35,7 @@
 #include "spherecull/sc_simd.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_trace.h"
+#include "spherecull/sc_accel.h"
 #include "spherecull/sc_camera.h"
 #include "spherecull/sc_rays.h"
 

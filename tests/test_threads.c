@@ -5,7 +5,12 @@
  *   - per ISA level this CPU supports: 4 threads trace one shared BVH
  *     (closest and any hit, with and without statistics) while 2 threads
  *     build, trace and free BVHs of their own, over and over; and once more
- *     while a seventh thread switches the ISA level back and forth.
+ *     while a seventh thread switches the ISA level back and forth;
+ *   - scenes (sc_accel.h): 4 threads trace one scene of instances while 2
+ *     threads make scenes of their own that instance the same object
+ *     scene (its reference count changed from three threads), commit,
+ *     trace, refit and release them, and build, refit and release scenes
+ *     of their own meshes.
  * Every answer a thread gets is compared with the one computed before the
  * threads started, so a race that changes a result fails here even without
  * TSan. Threads set the MXCSR mode under test (sc_ftz.h). */
@@ -22,6 +27,7 @@
 
 #include "common/sc_rng.h"
 #include "sc_ftz.h"
+#include "spherecull/sc_accel.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_prefilter.h"
 #include "spherecull/sc_simd.h"
@@ -309,12 +315,157 @@ static void test_parallel_build(void **state)
     free_soup(&big);
 }
 
+/* ---- scenes ------------------------------------------------------------ */
+
+enum { NINST = 12 };
+
+typedef struct scene_shared {
+    sc_accel *obj, *world;
+    const float (*xfm)[12];
+    const sc_ray *rays;
+    const sc_hitrec *want;
+    const int *want_occ;
+    pthread_barrier_t *go;
+} scene_shared;
+
+typedef struct scene_worker {
+    const scene_shared *sh;
+    int id;
+    size_t wrong, errors;
+} scene_worker;
+
+static void *scene_tracer(void *arg)
+{
+    scene_worker *w = arg;
+    const scene_shared *sh = w->sh;
+    sc_test_ftz_thread_init();
+    pthread_barrier_wait(sh->go);
+    for (int j = 0; j < NRAY; j++) {
+        int i = (j + w->id * NRAY / TRACERS) % NRAY;
+        sc_hitrec h;
+        int occ;
+        w->errors += sc_accel_closest(sh->world, &sh->rays[i], &h, NULL) != SC_OK;
+        w->errors += sc_accel_any(sh->world, &sh->rays[i], &occ, NULL) != SC_OK;
+        w->wrong += h.prim != sh->want[i].prim || h.inst != sh->want[i].inst ||
+                    memcmp(&h.t, &sh->want[i].t, sizeof h.t) != 0 || occ != sh->want_occ[i];
+    }
+    return NULL;
+}
+
+static void *scene_builder(void *arg)
+{
+    scene_worker *w = arg;
+    const scene_shared *sh = w->sh;
+    sc_test_ftz_thread_init();
+    pthread_barrier_wait(sh->go);
+    for (int b = 0; b < 3; b++) {
+        /* the shared object, instanced as the shared world does: the same answers */
+        sc_accel *mine = NULL;
+        w->errors += sc_accel_new(NULL, &mine) != SC_OK;
+        if (!mine)
+            continue;
+        for (int i = 0; i < NINST; i++)
+            w->errors += sc_accel_attach_instance(mine, sh->obj, sh->xfm[i], NULL) != SC_OK;
+        w->errors += sc_accel_commit(mine) != SC_OK;
+        w->errors += sc_accel_refit(mine) != SC_OK;
+        for (int i = 0; i < 100; i++) {
+            sc_hitrec h;
+            w->errors += sc_accel_closest(mine, &sh->rays[i], &h, NULL) != SC_OK;
+            w->wrong += h.prim != sh->want[i].prim || h.inst != sh->want[i].inst;
+        }
+        sc_accel_release(mine);
+        /* a scene of its own mesh, refitted after the mesh moved */
+        soup s;
+        make_soup(5000 + 10 * (uint64_t)w->id + (uint64_t)b, NTRI, 0.08, &s);
+        sc_accel *own = NULL;
+        w->errors += sc_accel_new(NULL, &own) != SC_OK;
+        if (own) {
+            const sc_mesh_view v = { s.pos, 3 * NTRI, s.idx, NTRI, 0, 0 };
+            w->errors += sc_accel_attach_mesh(own, &v, SC_ACCEL_SHARED, NULL) != SC_OK;
+            w->errors += sc_accel_commit(own) != SC_OK;
+            for (int i = 0; i < 9 * NTRI; i++)
+                s.pos[i] *= 1.01f;
+            w->errors += sc_accel_refit(own) != SC_OK;
+            sc_bvh *fresh = NULL;
+            w->errors += sc_bvh_build(&v, NULL, &fresh) != SC_OK;
+            for (int i = 0; fresh && i < 64; i++) {
+                sc_hitrec h, hf;
+                w->errors += sc_accel_closest(own, &sh->rays[i], &h, NULL) != SC_OK;
+                w->errors += sc_trace_closest(fresh, &sh->rays[i], &hf, NULL) != SC_OK;
+                w->wrong += h.prim != hf.prim || memcmp(&h.t, &hf.t, sizeof h.t) != 0;
+            }
+            sc_bvh_free(fresh);
+            sc_accel_release(own);
+        }
+        free_soup(&s);
+    }
+    return NULL;
+}
+
+static void test_shared_scene(void **state)
+{
+    (void)state;
+    soup s;
+    make_soup(9, NTRI, 0.08, &s);
+    sc_accel *obj, *world;
+    assert_int_equal(sc_accel_new(NULL, &obj), SC_OK);
+    assert_int_equal(sc_accel_attach_mesh(obj, &(sc_mesh_view){ s.pos, 3 * NTRI, s.idx, NTRI, 0, 0 }, SC_ACCEL_COPY,
+                                          NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(obj), SC_OK);
+    assert_int_equal(sc_accel_new(NULL, &world), SC_OK);
+    float xfm[NINST][12];
+    for (int i = 0; i < NINST; i++) {
+        const float c = cosf(0.5f * (float)i), sn = sinf(0.5f * (float)i), sc = 0.3f + 0.05f * (float)i;
+        const float x[12] = { sc * c, -sc * sn, 0, 0.4f * (float)(i % 4) - 0.6f, sc * sn, sc * c, 0,
+                              0.4f * (float)(i / 4) - 0.4f, 0, 0, sc, 0.1f * (float)i };
+        memcpy(xfm[i], x, sizeof x);
+        assert_int_equal(sc_accel_attach_instance(world, obj, xfm[i], NULL), SC_OK);
+    }
+    assert_int_equal(sc_accel_commit(world), SC_OK);
+    sc_ray *rays = malloc(sizeof(sc_ray) * NRAY);
+    sc_hitrec *want = malloc(sizeof(sc_hitrec) * NRAY);
+    int *want_occ = malloc(sizeof(int) * NRAY);
+    make_rays(13, rays, NRAY);
+    size_t hits = 0;
+    for (int i = 0; i < NRAY; i++) {
+        assert_int_equal(sc_accel_closest(world, &rays[i], &want[i], NULL), SC_OK);
+        assert_int_equal(sc_accel_any(world, &rays[i], &want_occ[i], NULL), SC_OK);
+        hits += want[i].prim != SC_HITREC_MISS;
+    }
+    assert_true(hits > NRAY / 10);
+    pthread_barrier_t go;
+    pthread_barrier_init(&go, NULL, TRACERS + BUILDERS);
+    scene_shared sh = { obj, world, (const float (*)[12])xfm, rays, want, want_occ, &go };
+    pthread_t th[TRACERS + BUILDERS];
+    scene_worker w[TRACERS + BUILDERS];
+    for (int i = 0; i < TRACERS + BUILDERS; i++) {
+        w[i] = (scene_worker){ &sh, i, 0, 0 };
+        assert_int_equal(pthread_create(&th[i], NULL, i < TRACERS ? scene_tracer : scene_builder, &w[i]), 0);
+    }
+    size_t wrong = 0, errors = 0;
+    for (int i = 0; i < TRACERS + BUILDERS; i++) {
+        pthread_join(th[i], NULL);
+        wrong += w[i].wrong, errors += w[i].errors;
+    }
+    pthread_barrier_destroy(&go);
+    print_message("scenes: %d tracers x %d rays on one scene of %d instances (%zu hits) while %d threads made, "
+                  "refitted and released scenes sharing its object: %zu wrong answers, %zu errors\n",
+                  TRACERS, NRAY, NINST, hits, BUILDERS, wrong, errors);
+    assert_int_equal(wrong, 0);
+    assert_int_equal(errors, 0);
+    sc_accel_release(obj);
+    sc_accel_release(world);
+    free(rays), free(want), free(want_occ);
+    free_soup(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_first_use),     /* first: nothing has touched the library yet */
         cmocka_unit_test(test_shared_bvh),
         cmocka_unit_test(test_parallel_build),
+        cmocka_unit_test(test_shared_scene),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

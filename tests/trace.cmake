@@ -25,3 +25,9 @@ sc_add_test(test_packets SOURCES test_packets.c
 # The compact sphere summary: each decoded sphere contains its triangle
 # (MPFR), the same bits with FTZ|DAZ, unencodable leaves never reject.
 sc_add_test(test_leaf_summary SOURCES test_leaf_summary.c FTZ)
+
+# The scene handle: several meshes, instances (against each instance on
+# its own and the MPFR oracle on its rounded object ray), refit.
+if(TARGET spherecull_compare)
+  sc_add_test(test_accel SOURCES test_accel.c LIBS spherecull_compare spherecull_scene FTZ)
+endif()

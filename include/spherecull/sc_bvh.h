@@ -104,6 +104,8 @@ typedef struct sc_bvh_info {
     double build_seconds;
     sc_prefilter_mode prefilter;
     int leaf_size;
+    double built_sah_cost;       /* sah_cost when built; after sc_bvh_refit, sah_cost is the refitted
+                                    tree's (their ratio: how far the tree has drifted from a fresh build) */
 } sc_bvh_info;
 
 typedef struct sc_bvh sc_bvh;
@@ -127,6 +129,21 @@ SC_API void sc_bvh_config_default(sc_bvh_config *cfg);
  * (sc_isa.h) is chosen once for the whole library. */
 SC_API sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg, sc_bvh **out);
 SC_API void sc_bvh_free(sc_bvh *bvh);
+
+/* Refit after the mesh's vertices moved, its triangles the same: every box,
+ * vertex row and sphere (or summary) of the tree recomputed bottom-up from
+ * mesh (the same triangle count and indices the BVH was built from, new
+ * positions), the tree itself kept. The result answers every ray exactly
+ * as a fresh build over the new vertices does (the same hits, bit for bit,
+ * except that of SC_TRI_EXACT's exact ties another may be reported; the
+ * same guarantees: conservative boxes, spheres that contain their
+ * triangles); only the work per ray can grow, as sc_bvh_info.sah_cost
+ * against built_sah_cost says (sc_accel.h rebuilds past a measured
+ * growth). Errors, the BVH left as it was: INVALID_ARGUMENT (NULL, another
+ * triangle count, bad layout, index out of range), NONFINITE (a triangle
+ * with a non-finite vertex now, or one left out of the build for it:
+ * rebuild). Threads: no thread may trace the BVH during a refit. */
+SC_API sc_status sc_bvh_refit(sc_bvh *bvh, const sc_mesh_view *mesh);
 SC_API sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 
 /* "off", "circum", "minimal", "auto", "compact"; "watertight", "moller", "exact". */

@@ -9,7 +9,9 @@
 
 typedef struct bvh_builder {
     const sc_bvh_config *cfg;
-    const sc_mesh_view *mesh;
+    const sc_mesh_view *meshes;  /* the build input: one or more meshes */
+    size_t mesh_count;
+    const uint32_t *first;       /* mesh_count + 1: triangle t of mesh g is global id first[g] + t */
     const uint32_t *ids;     /* triangle ids, leaves are contiguous ranges */
     const sc_bnode *bn;      /* the binary tree */
     int dry;                 /* 1: only measure */
@@ -23,7 +25,13 @@ typedef struct bvh_builder {
 
 static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)
 {
-    return sc_mesh_vertex(B->mesh, sc_mesh_triangle(B->mesh, tri)[corner]);
+    const sc_mesh_view *m = B->meshes;
+    if (B->mesh_count > 1) {
+        size_t g = sc_mesh_of(B->first, B->mesh_count, tri);
+        m += g;
+        tri -= B->first[g];
+    }
+    return sc_mesh_vertex(m, sc_mesh_triangle(m, tri)[corner]);
 }
 
 /* Writes (or, dry, measures) the 8-wide node over binary nodes kids[0..nk)
@@ -31,5 +39,10 @@ static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)
 uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids, int nk, int depth);
 /* Writes (or measures) the leaf block of binary leaf bi; returns its reference. */
 uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi);
+
+/* Refit: rewrites the leaf block of reference ref (its vertex rows and its
+ * spheres or summary) from B's meshes, the triangles it holds unchanged, and
+ * returns the box of its triangles in *box. */
+void sc_leaf_refit(const bvh_builder *B, uint64_t ref, box3 *box);
 
 #endif

@@ -39,27 +39,57 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    if (!mesh || !sc_mesh_layout_ok(mesh))
+    if (!mesh)
         return SC_ERR_INVALID_ARGUMENT;
-    const size_t vertex_count = mesh->vertex_count, triangle_count = mesh->triangle_count;
+    return sc_bvh_build_set(mesh, 1, cfg_in, out);
+}
+
+/* Checks one mesh of the input: layout, arrays, indices in range. */
+static sc_status check_mesh(const sc_mesh_view *mesh)
+{
+    if (!sc_mesh_layout_ok(mesh))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (mesh->triangle_count && (!mesh->positions || !mesh->indices))
+        return SC_ERR_INVALID_ARGUMENT;
+    const size_t vertex_count = mesh->vertex_count;
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = sc_mesh_triangle(mesh, t);
+        if (ix[0] >= vertex_count || ix[1] >= vertex_count || ix[2] >= vertex_count)
+            return SC_ERR_INVALID_ARGUMENT;
+    }
+    return SC_OK;
+}
+
+sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const sc_bvh_config *cfg_in,
+                           sc_bvh **out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!meshes || mesh_count == 0 || mesh_count > (size_t)INT32_MAX)
+        return SC_ERR_INVALID_ARGUMENT;
     sc_bvh_config cfg;
     if (cfg_in)
         cfg = *cfg_in;
     else
         sc_bvh_config_default(&cfg);
-    if (triangle_count && (!mesh->positions || !mesh->indices))
-        return SC_ERR_INVALID_ARGUMENT;
     if (cfg.leaf_size < 1 || cfg.leaf_size > SC_BVH_MAX_LEAF || (unsigned)cfg.prefilter >= SC_PREFILTER_MODE_COUNT ||
         (unsigned)cfg.tri_test >= SC_TRI_TEST_COUNT ||
         cfg.sah_bins < 4 || cfg.sah_bins > SC_SAH_MAX_BINS || !(cfg.traversal_cost >= 0) || !isfinite(cfg.traversal_cost) ||
         cfg.threads < 0 || cfg.threads > SC_BVH_MAX_THREADS)
         return SC_ERR_INVALID_ARGUMENT;
-    if (triangle_count > (size_t)INT32_MAX)
-        return SC_ERR_LIMIT;
-    for (size_t t = 0; t < triangle_count; t++) {
-        const uint32_t *ix = sc_mesh_triangle(mesh, t);
-        if (ix[0] >= vertex_count || ix[1] >= vertex_count || ix[2] >= vertex_count)
+    size_t triangle_count = 0;
+    for (size_t g = 0; g < mesh_count; g++) {
+        if (!sc_mesh_layout_ok(&meshes[g]))
             return SC_ERR_INVALID_ARGUMENT;
+        triangle_count += meshes[g].triangle_count;
+        if (meshes[g].triangle_count > (size_t)INT32_MAX || triangle_count > (size_t)INT32_MAX)
+            return SC_ERR_LIMIT;
+    }
+    for (size_t g = 0; g < mesh_count; g++) {
+        sc_status cs = check_mesh(&meshes[g]);
+        if (cs != SC_OK)
+            return cs;
     }
     sc_status st;
 
@@ -67,7 +97,15 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     sc_bvh *bvh = calloc(1, sizeof *bvh);
     bvh_builder B = { 0 };
     B.cfg = &cfg;
-    B.mesh = mesh;
+    B.meshes = meshes;
+    B.mesh_count = mesh_count;
+    uint32_t *first = malloc(sizeof(uint32_t) * (mesh_count + 1));
+    if (first) {
+        first[0] = 0;
+        for (size_t g = 0; g < mesh_count; g++)
+            first[g + 1] = first[g] + (uint32_t)meshes[g].triangle_count;
+    }
+    B.first = first;
     size_t n = triangle_count;
     box3 *pbox = malloc(sizeof(box3) * (n ? n : 1));
     float (*cen)[3] = malloc(sizeof(float[3]) * (n ? n : 1));
@@ -77,9 +115,12 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     B.ids = ids;
     B.bn = bn;
     st = SC_ERR_OUT_OF_MEMORY;
-    if (!bvh || !pbox || !cen || !ids || !bn || !B.auto_use)
+    if (!bvh || !first || !pbox || !cen || !ids || !bn || !B.auto_use)
         goto fail;
     bvh->cfg = cfg;
+    bvh->first = first;
+    bvh->mesh_count = mesh_count;
+    first = NULL;
 
     size_t used = 0;
     for (size_t t = 0; t < n; t++) {
@@ -151,7 +192,7 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     bvh->leaf_bytes = B.leaf_used;
     bvh->sphere_bytes = B.sphere_used;
     bvh->depth = B.max_depth;
-    bvh->sah_cost = B.sah;
+    bvh->sah_cost = bvh->built_sah_cost = B.sah;
     bvh->build_seconds = sc_now_seconds() - t0;
     free(pbox);
     free(cen);
@@ -162,6 +203,7 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     return SC_OK;
 
 fail:
+    free(first);
     free(pbox);
     free(cen);
     free(ids);
@@ -177,6 +219,7 @@ void sc_bvh_free(sc_bvh *bvh)
         return;
     free(bvh->nodes);
     free(bvh->leaves);
+    free(bvh->first);
     free(bvh);
 }
 
@@ -193,12 +236,13 @@ sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info)
     info->node_bytes = bvh->node_count * sizeof(sc_bvh_node8);
     info->leaf_bytes = bvh->leaf_bytes;
     info->sphere_bytes = bvh->sphere_bytes;
-    info->total_bytes = info->node_bytes + info->leaf_bytes + sizeof *bvh;
+    info->total_bytes = info->node_bytes + info->leaf_bytes + sizeof *bvh + sizeof(uint32_t) * (bvh->mesh_count + 1);
     info->depth = bvh->depth;
     info->sah_cost = bvh->sah_cost;
     info->build_seconds = bvh->build_seconds;
     info->prefilter = bvh->cfg.prefilter;
     info->leaf_size = bvh->cfg.leaf_size;
+    info->built_sah_cost = bvh->built_sah_cost;
     return SC_OK;
 }
 

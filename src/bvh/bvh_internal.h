@@ -21,7 +21,33 @@ struct sc_bvh {
     size_t triangles, skipped;
     int depth;
     double sah_cost, build_seconds;
+    double built_sah_cost;       /* sah_cost when built; a refit changes sah_cost only */
     sc_bvh_config cfg;
+    size_t mesh_count;           /* the build input: leaf ids are global ids over its meshes, */
+    uint32_t *first;             /* mesh g's triangle t is first[g] + t (mesh_count + 1 entries) */
 };
+
+/* The mesh that holds global triangle id tri (first[] ascending). */
+static inline size_t sc_mesh_of(const uint32_t *first, size_t mesh_count, uint32_t tri)
+{
+    size_t lo = 0, hi = mesh_count;   /* first[lo] <= tri < first[hi] */
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (first[mid] <= tri)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The build over several meshes at once (one tree; leaf ids are global
+ * ids, sc_bvh.first maps them back): what sc_bvh_build does for one and the
+ * scene handle (sc_accel.h) for its meshes. Same checks and errors. */
+sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const sc_bvh_config *cfg,
+                           sc_bvh **out);
+/* The refit of such a tree from the same meshes after their vertices moved
+ * (sc_bvh_refit). */
+sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_count);
 
 #endif

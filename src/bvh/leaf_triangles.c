@@ -217,3 +217,41 @@ uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi)
     return sc_ref_leaf(off, n, flags);
 }
 
+
+void sc_leaf_refit(const bvh_builder *B, uint64_t ref, box3 *box)
+{
+    const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+    float *block = (float *)(void *)(B->bvh->leaves + sc_ref_offset(ref));
+    float *f = (float *)sc_leaf_rows(block, W, ref);
+    const uint32_t *prim = sc_leaf_prims(f, W);
+    uint32_t ids[SC_BVH_MAX_LEAF];
+    memcpy(ids, prim, sizeof(uint32_t) * n);
+    /* The spheres' and summary's code reads the leaf as a binary leaf over
+     * B->ids; this one is a leaf of its own ids. */
+    bvh_builder L = *B;
+    L.ids = ids;
+    sc_bnode leaf = { .a = 0, .b = n, .leaf = 1 };
+    box_empty(&leaf.box);
+    for (unsigned i = 0; i < n; i++)
+        for (int corner = 0; corner < 3; corner++) {
+            const float *p = vtx(&L, ids[i], corner);
+            for (int k = 0; k < 3; k++) {
+                leaf.box.lo[k] = p[k] < leaf.box.lo[k] ? p[k] : leaf.box.lo[k];
+                leaf.box.hi[k] = p[k] > leaf.box.hi[k] ? p[k] : leaf.box.hi[k];
+            }
+        }
+    if (sc_ref_has_spheres(ref))
+        leaf_spheres(&L, &leaf, B->cfg->prefilter == SC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL,
+                     W, block);
+    if (sc_ref_has_summary(ref))
+        leaf_summary(&L, &leaf, W, block);
+    for (unsigned i = 0; i < W; i++) {
+        uint32_t t = ids[i < n ? i : n - 1];
+        for (int corner = 0; corner < 3; corner++) {
+            const float *p = vtx(&L, t, corner);
+            for (int k = 0; k < 3; k++)
+                f[sc_leaf_at(W, (unsigned)corner, (unsigned)k, i)] = p[k];
+        }
+    }
+    *box = leaf.box;
+}

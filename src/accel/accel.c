@@ -1,0 +1,816 @@
+/* The scene handle (sc_accel.h): meshes under one BVH (sc_bvh_build_set),
+ * rigid instances under a small top-level tree of 8-wide nodes over their
+ * world boxes, traced by the single-ray kernels of each BVH through the
+ * public sc_trace_* calls. The top level is scalar: it holds a few
+ * thousand boxes at most, and a ray spends its time in the instances'
+ * trees. */
+#include <float.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "bvh/build_binned_sah.h"
+#include "bvh/bvh_internal.h"
+#include "common/sc_clock.h"
+#include "spherecull/sc_accel.h"
+#include "trace/ray_setup.h"
+#include "trace/traverse_stack.h"
+
+typedef struct accel_inst {
+    sc_accel *obj;
+    float xfm[12];
+    double inv[12];              /* world to object: M^-1 and -M^-1 T */
+    float cof[9];                /* cof(M) = det(M) M^-T, row-major: normals to world */
+    double kappa;                /* ||M||_F ||M^-1||_F >= the condition number */
+    double radius;               /* of its world box around T */
+} accel_inst;
+
+struct sc_accel {
+    atomic_int refs;
+    sc_bvh_config cfg;
+    sc_mesh_view *views;         /* what the BVH is built from */
+    void **copies;               /* per mesh: the SC_ACCEL_COPY arrays, or NULL */
+    size_t nmesh, cap_mesh;
+    accel_inst *inst;
+    size_t ninst, cap_inst;
+    sc_bvh *bvh;                 /* over the meshes; NULL when there are none */
+    int bvh_stale;               /* meshes attached or moved since the BVH was built */
+    size_t bvh_meshes;           /* meshes in the BVH */
+    /* The top level (instances only): items 0..ninst-1 are the instances,
+     * item ninst the scene's own BVH. */
+    sc_bvh_node8 *top;
+    size_t top_nodes;
+    uint64_t top_root;           /* 0: no item has a box */
+    float top_lo[3], top_hi[3];
+    double top_kappa, top_radius;
+    int committed;
+    double build_seconds;
+    unsigned builds, refits;
+};
+
+/* ---- life ------------------------------------------------------------- */
+
+sc_status sc_accel_new(const sc_bvh_config *cfg, sc_accel **out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    sc_accel *a = calloc(1, sizeof *a);
+    if (!a)
+        return SC_ERR_OUT_OF_MEMORY;
+    if (cfg)
+        a->cfg = *cfg;
+    else
+        sc_bvh_config_default(&a->cfg);
+    atomic_init(&a->refs, 1);
+    *out = a;
+    return SC_OK;
+}
+
+void sc_accel_retain(sc_accel *a)
+{
+    if (a)
+        atomic_fetch_add_explicit(&a->refs, 1, memory_order_relaxed);
+}
+
+void sc_accel_release(sc_accel *a)
+{
+    if (!a || atomic_fetch_sub_explicit(&a->refs, 1, memory_order_acq_rel) != 1)
+        return;
+    for (size_t i = 0; i < a->ninst; i++)
+        sc_accel_release(a->inst[i].obj);
+    for (size_t g = 0; g < a->nmesh; g++)
+        free(a->copies[g]);
+    free(a->views);
+    free(a->copies);
+    free(a->inst);
+    free(a->top);
+    sc_bvh_free(a->bvh);
+    free(a);
+}
+
+/* ---- attach --------------------------------------------------------------- */
+
+static int grow(void **arr, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return 1;
+    size_t c = *cap ? 2 * *cap : 8;
+    while (c < need)
+        c *= 2;
+    void *p = realloc(*arr, c * size);
+    if (!p)
+        return 0;
+    *arr = p;
+    *cap = c;
+    return 1;
+}
+
+sc_status sc_accel_attach_mesh(sc_accel *a, const sc_mesh_view *mesh, unsigned flags, uint32_t *geom_id)
+{
+    if (!a || !mesh || flags > SC_ACCEL_COPY || !sc_mesh_layout_ok(mesh) || a->nmesh >= UINT32_MAX - 1)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (mesh->triangle_count && (!mesh->positions || !mesh->indices))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (mesh->vertex_count > UINT32_MAX || mesh->triangle_count > (size_t)INT32_MAX)
+        return SC_ERR_LIMIT;
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *ix = sc_mesh_triangle(mesh, t);
+        if (ix[0] >= mesh->vertex_count || ix[1] >= mesh->vertex_count || ix[2] >= mesh->vertex_count)
+            return SC_ERR_INVALID_ARGUMENT;
+    }
+    if (!grow((void **)&a->views, &a->cap_mesh, a->nmesh + 1, sizeof *a->views))
+        return SC_ERR_OUT_OF_MEMORY;
+    size_t cap = a->cap_mesh;
+    void *copies = realloc(a->copies, cap * sizeof *a->copies);
+    if (!copies)
+        return SC_ERR_OUT_OF_MEMORY;
+    a->copies = copies;
+    sc_mesh_view v = *mesh;
+    void *copy = NULL;
+    if (flags == SC_ACCEL_COPY) {
+        size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
+        copy = malloc(12 * nv + 12 * nt + 1);
+        if (!copy)
+            return SC_ERR_OUT_OF_MEMORY;
+        float *pos = copy;
+        uint32_t *idx = (uint32_t *)(void *)(pos + 3 * nv);
+        for (size_t i = 0; i < nv; i++)
+            memcpy(pos + 3 * i, sc_mesh_vertex(mesh, i), 12);
+        for (size_t t = 0; t < nt; t++)
+            memcpy(idx + 3 * t, sc_mesh_triangle(mesh, t), 12);
+        v = (sc_mesh_view){ pos, nv, idx, nt, 0, 0 };
+    }
+    a->views[a->nmesh] = v;
+    a->copies[a->nmesh] = copy;
+    if (geom_id)
+        *geom_id = (uint32_t)a->nmesh;
+    a->nmesh++;
+    a->bvh_stale = 1;
+    a->committed = 0;
+    return SC_OK;
+}
+
+/* The instance's inverse, normal matrix and condition bound from xfm; 0 if
+ * xfm is not finite and invertible. */
+static int inst_set(accel_inst *in, const float xfm[12])
+{
+    double m[3][3], t[3];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            m[i][j] = xfm[4 * i + j];
+            if (!isfinite(m[i][j]))
+                return 0;
+        }
+        t[i] = xfm[4 * i + 3];
+        if (!isfinite(t[i]))
+            return 0;
+    }
+    /* cof(M): its columns are the cross products of M's columns. */
+    double c[3][3];
+    for (int j = 0; j < 3; j++) {
+        int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+        c[0][j] = m[1][j1] * m[2][j2] - m[2][j1] * m[1][j2];
+        c[1][j] = m[2][j1] * m[0][j2] - m[0][j1] * m[2][j2];
+        c[2][j] = m[0][j1] * m[1][j2] - m[1][j1] * m[0][j2];
+    }
+    double det = m[0][0] * c[0][0] + m[1][0] * c[1][0] + m[2][0] * c[2][0];
+    if (!(fabs(det) > 0) || !isfinite(det))
+        return 0;
+    double nm = 0, ni = 0;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            double v = c[j][i] / det;   /* M^-1 = cof(M)^T / det */
+            in->inv[4 * i + j] = v;
+            nm += m[i][j] * m[i][j];
+            ni += v * v;
+            in->cof[3 * i + j] = (float)c[i][j];
+            if (!isfinite(v) || !isfinite(in->cof[3 * i + j]))
+                return 0;
+        }
+    }
+    for (int i = 0; i < 3; i++)
+        in->inv[4 * i + 3] = -(in->inv[4 * i] * t[0] + in->inv[4 * i + 1] * t[1] + in->inv[4 * i + 2] * t[2]);
+    in->kappa = sqrt(nm) * sqrt(ni);
+    if (!isfinite(in->kappa))
+        return 0;
+    memcpy(in->xfm, xfm, sizeof in->xfm);
+    return 1;
+}
+
+sc_status sc_accel_attach_instance(sc_accel *a, sc_accel *obj, const float xfm[12], uint32_t *inst_id)
+{
+    if (!a || !obj || !xfm || obj == a || !obj->committed || obj->ninst || a->ninst >= UINT32_MAX - 1)
+        return SC_ERR_INVALID_ARGUMENT;
+    accel_inst in = { 0 };
+    if (!inst_set(&in, xfm))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!grow((void **)&a->inst, &a->cap_inst, a->ninst + 1, sizeof *a->inst))
+        return SC_ERR_OUT_OF_MEMORY;
+    in.obj = obj;
+    sc_accel_retain(obj);
+    a->inst[a->ninst] = in;
+    if (inst_id)
+        *inst_id = (uint32_t)a->ninst;
+    a->ninst++;
+    a->committed = 0;
+    return SC_OK;
+}
+
+sc_status sc_accel_set_transform(sc_accel *a, uint32_t id, const float xfm[12])
+{
+    if (!a || !xfm || id >= a->ninst)
+        return SC_ERR_INVALID_ARGUMENT;
+    accel_inst in = a->inst[id];
+    if (!inst_set(&in, xfm))
+        return SC_ERR_INVALID_ARGUMENT;
+    a->inst[id] = in;
+    a->committed = 0;
+    return SC_OK;
+}
+
+sc_status sc_accel_update_vertices(sc_accel *a, uint32_t geom, const float *positions, size_t stride)
+{
+    if (!a || !positions || geom >= a->nmesh)
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_mesh_view v = a->views[geom];
+    v.positions = positions;
+    v.vertex_stride = stride;
+    if (!sc_mesh_layout_ok(&v))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (a->copies[geom]) {
+        float *dst = a->copies[geom];
+        for (size_t i = 0; i < v.vertex_count; i++)
+            memcpy(dst + 3 * i, sc_mesh_vertex(&v, i), 12);
+    } else {
+        a->views[geom] = v;
+    }
+    a->bvh_stale = 1;
+    a->committed = 0;
+    return SC_OK;
+}
+
+/* ---- commit ------------------------------------------------------------- */
+
+/* The world box of an object box under an instance: the 8 corners mapped
+ * in double, rounded outward, padded by 2^-20 of the box's extent. */
+static void world_box(const accel_inst *in, const float lo[3], const float hi[3], box3 *out)
+{
+    double l[3] = { INFINITY, INFINITY, INFINITY }, h[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (int c = 0; c < 8; c++) {
+        const double p[3] = { c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2] };
+        for (int i = 0; i < 3; i++) {
+            const float *r = in->xfm + 4 * i;
+            double w = (double)r[0] * p[0] + (double)r[1] * p[1] + (double)r[2] * p[2] + r[3];
+            l[i] = fmin(l[i], w);
+            h[i] = fmax(h[i], w);
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        double pad = (h[i] - l[i]) * 0x1p-20 + (fabs(l[i]) + fabs(h[i])) * 0x1p-40;
+        out->lo[i] = nextafterf((float)(l[i] - pad), -INFINITY);
+        out->hi[i] = nextafterf((float)(h[i] + pad), INFINITY);
+    }
+}
+
+typedef struct top_builder {
+    const sc_bnode *bn;
+    const uint32_t *ids;
+    sc_bvh_node8 *nodes;
+    size_t used;
+} top_builder;
+
+/* The binary tree collapsed into 8-wide nodes as the BVH's collapse does
+ * (open the largest child); a leaf reference carries its item in the
+ * offset bits. */
+static uint64_t top_collapse(top_builder *T, const uint32_t *kids_in, int nk)
+{
+    uint32_t kids[SC_BVH_N];
+    memcpy(kids, kids_in, sizeof(uint32_t) * (size_t)nk);
+    while (nk < SC_BVH_N) {
+        int best = -1;
+        float best_area = -1;
+        for (int i = 0; i < nk; i++) {
+            const sc_bnode *c = &T->bn[kids[i]];
+            if (!c->leaf && box_area(&c->box) > best_area)
+                best_area = box_area(&c->box), best = i;
+        }
+        if (best < 0)
+            break;
+        const sc_bnode *c = &T->bn[kids[best]];
+        kids[best] = c->a;
+        kids[nk++] = c->b;
+    }
+    size_t my = T->used++;
+    sc_bvh_node8 *node = &T->nodes[my];
+    for (int i = 0; i < SC_BVH_N; i++) {
+        const sc_bnode *c = i < nk ? &T->bn[kids[i]] : NULL;
+        for (int k = 0; k < 3; k++) {
+            node->b[2 * k][i] = c ? c->box.lo[k] : INFINITY;
+            node->b[2 * k + 1][i] = c ? c->box.hi[k] : -INFINITY;
+        }
+        uint64_t ref = 0;
+        if (c && c->leaf) {
+            ref = SC_REF_LEAF | T->ids[c->a];
+        } else if (c) {
+            uint32_t two[2] = { c->a, c->b };
+            ref = (uint64_t)top_collapse(T, two, 2);
+        }
+        node->child[i] = ref;
+    }
+    return my;
+}
+
+static sc_status build_top(sc_accel *a)
+{
+    free(a->top);
+    a->top = NULL;
+    a->top_nodes = 0;
+    a->top_root = 0;
+    a->top_kappa = 1;
+    a->top_radius = 0;
+    if (!a->ninst)
+        return SC_OK;
+    const size_t nitems = a->ninst + 1;
+    box3 *boxes = malloc(nitems * sizeof *boxes);
+    float (*cen)[3] = malloc(nitems * sizeof *cen);
+    uint32_t *ids = malloc(nitems * sizeof *ids);
+    sc_bnode *bn = malloc((2 * nitems + 1) * sizeof *bn);
+    a->top = aligned_alloc(64, (nitems + 1) * sizeof(sc_bvh_node8));
+    sc_status st = SC_ERR_OUT_OF_MEMORY;
+    if (!boxes || !cen || !ids || !bn || !a->top)
+        goto out;
+    size_t n = 0;
+    box3 all;
+    box_empty(&all);
+    for (size_t i = 0; i < nitems; i++) {
+        const sc_bvh *b = i < a->ninst ? a->inst[i].obj->bvh : a->bvh;
+        if (!b || !b->has_root)
+            continue;
+        if (i < a->ninst) {
+            accel_inst *in = &a->inst[i];
+            world_box(in, b->root_lo, b->root_hi, &boxes[n]);
+            double r = 0;
+            for (int k = 0; k < 3; k++) {
+                double e = fmax(fabs((double)boxes[n].lo[k] - in->xfm[4 * k + 3]),
+                                fabs((double)boxes[n].hi[k] - in->xfm[4 * k + 3]));
+                r += e * e;
+            }
+            a->top_kappa = fmax(a->top_kappa, in->kappa);
+            a->top_radius = fmax(a->top_radius, sqrt(r));
+        } else {
+            for (int k = 0; k < 3; k++)
+                boxes[n].lo[k] = b->root_lo[k], boxes[n].hi[k] = b->root_hi[k];
+        }
+        for (int k = 0; k < 3; k++)
+            cen[n][k] = 0.5f * boxes[n].lo[k] + 0.5f * boxes[n].hi[k];
+        box_grow(&all, &boxes[n]);
+        ids[n++] = (uint32_t)i;
+    }
+    st = SC_OK;
+    if (!n)
+        goto out;
+    for (int k = 0; k < 3; k++)
+        a->top_lo[k] = all.lo[k], a->top_hi[k] = all.hi[k];
+    const sc_sah_params sah = { 1, 16, 1.0f, 1 };
+    size_t count;
+    uint32_t root = sc_build_binned_sah(boxes, (const float (*)[3])cen, ids, n, &sah, bn, &count);
+    top_builder T = { bn, ids, a->top, 0 };
+    if (bn[root].leaf)
+        top_collapse(&T, &root, 1);
+    else
+        top_collapse(&T, (uint32_t[2]){ bn[root].a, bn[root].b }, 2);
+    a->top_nodes = T.used;
+    a->top_root = 1;
+out:
+    free(boxes);
+    free(cen);
+    free(ids);
+    free(bn);
+    return st;
+}
+
+static sc_status build_meshes(sc_accel *a)
+{
+    sc_bvh_free(a->bvh);
+    a->bvh = NULL;
+    a->bvh_meshes = 0;
+    if (!a->nmesh)
+        return SC_OK;
+    sc_status st = sc_bvh_build_set(a->views, a->nmesh, &a->cfg, &a->bvh);
+    if (st != SC_OK)
+        return st;
+    a->bvh_meshes = a->nmesh;
+    a->bvh_stale = 0;
+    a->builds++;
+    return SC_OK;
+}
+
+sc_status sc_accel_commit(sc_accel *a)
+{
+    if (!a)
+        return SC_ERR_INVALID_ARGUMENT;
+    for (size_t i = 0; i < a->ninst; i++)
+        if (!a->inst[i].obj->committed)
+            return SC_ERR_INVALID_ARGUMENT;
+    double t0 = sc_now_seconds();
+    a->committed = 0;
+    /* Meshes attached or updated since the last build are built afresh
+     * (only sc_accel_refit refits); the top level always is. */
+    sc_status st = SC_OK;
+    if (a->bvh_stale || a->bvh_meshes != a->nmesh)
+        st = build_meshes(a);
+    if (st == SC_OK)
+        st = build_top(a);
+    if (st != SC_OK)
+        return st;
+    a->committed = 1;
+    a->build_seconds = sc_now_seconds() - t0;
+    return SC_OK;
+}
+
+sc_status sc_accel_refit(sc_accel *a)
+{
+    if (!a)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!a->bvh || a->bvh_meshes != a->nmesh)
+        return sc_accel_commit(a);
+    for (size_t i = 0; i < a->ninst; i++)
+        if (!a->inst[i].obj->committed)
+            return SC_ERR_INVALID_ARGUMENT;
+    double t0 = sc_now_seconds();
+    a->committed = 0;
+    sc_status st = sc_bvh_refit_set(a->bvh, a->views, a->nmesh);
+    if (st == SC_OK && a->bvh->sah_cost > SC_ACCEL_REBUILD_GROWTH * a->bvh->built_sah_cost)
+        st = SC_ERR_LIMIT;   /* drifted too far: build afresh */
+    if (st == SC_OK)
+        a->refits++;
+    else if (st == SC_ERR_NONFINITE || st == SC_ERR_LIMIT)
+        st = build_meshes(a);
+    if (st == SC_OK)
+        st = build_top(a);
+    if (st != SC_OK)
+        return st;
+    a->committed = 1;
+    a->build_seconds = sc_now_seconds() - t0;
+    return SC_OK;
+}
+
+/* ---- trace -------------------------------------------------------------- */
+
+static void inst_ray(const accel_inst *in, const sc_ray *r, sc_ray *o)
+{
+    const double *m = in->inv;
+    for (int i = 0; i < 3; i++) {
+        const double *row = m + 4 * i;
+        o->org[i] = (float)(row[0] * r->org[0] + row[1] * r->org[1] + row[2] * r->org[2] + row[3]);
+        o->dir[i] = (float)(row[0] * r->dir[0] + row[1] * r->dir[1] + row[2] * r->dir[2]);
+    }
+    o->tmin = r->tmin;
+    o->tmax = r->tmax;
+}
+
+sc_status sc_accel_instance_ray(const sc_accel *a, uint32_t id, const sc_ray *ray, sc_ray *out)
+{
+    if (!a || !ray || !out || id >= a->ninst || !sc_ray_valid(ray))
+        return SC_ERR_INVALID_ARGUMENT;
+    inst_ray(&a->inst[id], ray, out);
+    return SC_OK;
+}
+
+/* A hit of mesh-set BVH b, its prim a global id, as (geom, prim). */
+static void map_ids(const sc_bvh *b, sc_hitrec *h)
+{
+    if (h->prim == SC_HITREC_MISS || b->mesh_count < 2)
+        return;
+    size_t g = sc_mesh_of(b->first, b->mesh_count, h->prim);
+    h->geom = (uint32_t)g;
+    h->prim -= b->first[g];
+}
+
+static void add_stats(sc_trace_stats *to, const sc_trace_stats *s)
+{
+    to->nodes += s->nodes;
+    to->leaves += s->leaves;
+    to->sphere_tests += s->sphere_tests;
+    to->sphere_rejects += s->sphere_rejects;
+    to->tri_tests += s->tri_tests;
+    to->tri_hits += s->tri_hits;
+}
+
+/* Of two hits at equal t the smaller (inst, geom, prim) wins; a miss has
+ * t = tmax and prim = MISS, so any hit at tmax beats it. */
+static int better(const sc_hitrec *h, const sc_hitrec *best)
+{
+    if (h->prim == SC_HITREC_MISS)
+        return 0;
+    if (best->prim == SC_HITREC_MISS || h->t < best->t)
+        return 1;
+    if (h->t > best->t)
+        return 0;
+    if (h->inst != best->inst)
+        return h->inst < best->inst;
+    if (h->geom != best->geom)
+        return h->geom < best->geom;
+    return h->prim < best->prim;
+}
+
+/* The top level's per-ray set-up. E bounds how far (in world space) a
+ * point of a rounded object-space ray lies from the world ray at the same
+ * t: u kappa (|o - T| + t |d|) <= u kappa (2 sqrt(3) m + R) for hits in the
+ * top box, with m the largest distance of the ray's origin from its planes
+ * and R the largest world-box radius around an instance's translation; E
+ * is twice that, so every node box grown by E keeps an instance whose
+ * rounded ray hits its geometry. In distance along axis k that is
+ * Ek = E |1/d_k|. */
+typedef struct top_ray {
+    float org[3], rd[3], Ek[3];   /* rd = fl(1/d), +-inf for d = +-0 */
+    int near_row[3], far_row[3];
+} top_ray;
+
+static void top_setup(const sc_accel *a, const sc_ray *r, top_ray *t)
+{
+    double m = 0;
+    for (int k = 0; k < 3; k++)
+        m = fmax(m, fmax(fabs((double)a->top_lo[k] - r->org[k]), fabs((double)a->top_hi[k] - r->org[k])));
+    const double E = 0x1p-23 * a->top_kappa * (3.4642 * m + a->top_radius) * 1.01 + 0x1p-120;
+    for (int k = 0; k < 3; k++) {
+        t->org[k] = r->org[k];
+        t->rd[k] = 1.0f / r->dir[k];
+        t->Ek[k] = (float)(E * fabs((double)t->rd[k]) * (1 + 0x1p-20));
+        const int neg = signbit(r->dir[k]) != 0;
+        t->near_row[k] = 2 * k + neg;
+        t->far_row[k] = 2 * k + 1 - neg;
+    }
+}
+
+/* The 8 children of a top node, their boxes grown by E, in the arithmetic
+ * of sc_slab_par (node_bvh8_slab.h: no FMA, so the baseline ISA's vector
+ * unit runs it): (plane - o) * fl(1/d) - Ek carries at most 4u of
+ * |plane - o| |1/d| <= (m + E) |1/d|, under a fifth of Ek since E >= 20u m
+ * (kappa >= 3 for Frobenius norms); the last rounding is covered by the
+ * relative 2^-21 and the absolute 2^-122 of the end. A ray in a slab's
+ * plane gives 0 * inf = NaN, which the running max/min ignore (a > b ? a :
+ * b returns b for a NaN), and a ray parallel to an axis gets Ek = inf: that
+ * axis never culls, which is conservative. dist[i]: a lower bound of child
+ * i's entry distance. */
+static unsigned top_slab(const top_ray *t, const sc_bvh_node8 *node, float tmin, float tmax, float *dist)
+{
+#if defined(__SSE2__)
+    /* The same operations four children at a time (SSE2: the x86-64
+     * baseline); maxps/minps return their second operand for a NaN. */
+    __m128 a0 = _mm_set1_ps(tmin), a1 = a0, b0 = _mm_set1_ps(tmax), b1 = b0;
+    for (int k = 0; k < 3; k++) {
+        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
+        const __m128 o = _mm_set1_ps(t->org[k]), rd = _mm_set1_ps(t->rd[k]), e = _mm_set1_ps(t->Ek[k]);
+        a0 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr), o), rd), e), a0);
+        a1 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr + 4), o), rd), e), a1);
+        b0 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr), o), rd), e), b0);
+        b1 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr + 4), o), rd), e), b1);
+    }
+    const __m128 down = _mm_set1_ps(1.0f - 0x1p-21f), up = _mm_set1_ps(1.0f + 0x1p-21f), eps = _mm_set1_ps(0x1p-122f);
+    a0 = _mm_sub_ps(_mm_mul_ps(a0, down), eps);
+    a1 = _mm_sub_ps(_mm_mul_ps(a1, down), eps);
+    b0 = _mm_add_ps(_mm_mul_ps(b0, up), eps);
+    b1 = _mm_add_ps(_mm_mul_ps(b1, up), eps);
+    _mm_storeu_ps(dist, a0);
+    _mm_storeu_ps(dist + 4, a1);
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(a0, b0)) | (unsigned)_mm_movemask_ps(_mm_cmple_ps(a1, b1)) << 4;
+#else
+    float a[SC_BVH_N], b[SC_BVH_N];
+    for (int i = 0; i < SC_BVH_N; i++)
+        a[i] = tmin, b[i] = tmax;
+    for (int k = 0; k < 3; k++) {
+        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
+        const float o = t->org[k], rd = t->rd[k], e = t->Ek[k];
+        for (int i = 0; i < SC_BVH_N; i++) {
+            const float tn = (nr[i] - o) * rd - e, tf = (fr[i] - o) * rd + e;
+            a[i] = tn > a[i] ? tn : a[i];
+            b[i] = tf < b[i] ? tf : b[i];
+        }
+    }
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        const float lo = a[i] * (1.0f - 0x1p-21f) - 0x1p-122f, hi = b[i] * (1.0f + 0x1p-21f) + 0x1p-122f;
+        dist[i] = lo;
+        mask |= (unsigned)(lo <= hi) << i;
+    }
+    return mask;
+#endif
+}
+
+/* One item of the top level against the ray: its hit into *best when
+ * better (closest), or 1 if it occludes (any). */
+static int visit_item(const sc_accel *a, uint32_t item, const sc_ray *ray, sc_hitrec *best, int any,
+                      sc_trace_stats *st)
+{
+    sc_ray r = *ray;
+    const sc_bvh *b = a->bvh;
+    const accel_inst *in = NULL;
+    if (item < a->ninst) {
+        in = &a->inst[item];
+        b = in->obj->bvh;
+        inst_ray(in, ray, &r);
+        if (!sc_ray_valid(&r))
+            return 0;
+    }
+    if (!b)
+        return 0;
+    sc_trace_stats s = { 0 };
+    sc_trace_stats *sp = st ? &s : NULL;
+    int hit = 0;
+    if (any) {
+        sc_trace_any(b, &r, &hit, sp);
+    } else {
+        sc_hitrec h;
+        r.tmax = best->t;
+        sc_trace_closest(b, &r, &h, sp);
+        map_ids(b, &h);
+        if (in)
+            h.inst = item;
+        if (better(&h, best)) {
+            if (in) {
+                const float n[3] = { h.ng[0], h.ng[1], h.ng[2] };
+                for (int i = 0; i < 3; i++)
+                    h.ng[i] = in->cof[3 * i] * n[0] + in->cof[3 * i + 1] * n[1] + in->cof[3 * i + 2] * n[2];
+            }
+            *best = h;
+        }
+    }
+    if (st)
+        add_stats(st, &s);
+    return hit;
+}
+
+static int top_trace(const sc_accel *a, const sc_ray *ray, sc_hitrec *best, int any, sc_trace_stats *st)
+{
+    if (!a->top_root)
+        return 0;
+    top_ray t;
+    top_setup(a, ray, &t);
+    sc_stack_entry stack[SC_TRACE_STACK];
+    int sp = 0;
+    stack[sp].ref = 0;
+    stack[sp].dist = ray->tmin;
+    sp++;
+    while (sp) {
+        const sc_stack_entry e = stack[--sp];
+        const float tmax = any ? ray->tmax : best->t;
+        if (e.dist > tmax)
+            continue;
+        if (sc_ref_is_leaf(e.ref)) {
+            if (visit_item(a, (uint32_t)(e.ref & 0xffffffffu), ray, best, any, st))
+                return 1;
+            continue;
+        }
+        const sc_bvh_node8 *node = &a->top[e.ref];
+        if (st)
+            st->nodes++;
+        float dist[SC_BVH_N];
+        unsigned mask = top_slab(&t, node, ray->tmin, tmax, dist);
+        if (!mask)
+            continue;
+        if ((mask & (mask - 1)) == 0) {
+            int i = __builtin_ctz(mask);
+            stack[sp].ref = node->child[i];
+            stack[sp].dist = dist[i];
+            sp++;
+            continue;
+        }
+        uint64_t nearest = sc_order_children(node, mask, dist, stack, &sp);
+        int i = 0;
+        while (node->child[i] != nearest)
+            i++;
+        stack[sp].ref = nearest;
+        stack[sp].dist = dist[i];
+        sp++;
+    }
+    return 0;
+}
+
+static void miss(const sc_ray *ray, sc_hitrec *h)
+{
+    memset(h, 0, sizeof *h);
+    h->t = ray->tmax;
+    h->prim = SC_HITREC_MISS;
+    h->geom = h->inst = SC_INVALID_ID;
+}
+
+sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st)
+{
+    if (!a || !ray || !hit || !a->committed || !sc_ray_valid(ray))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!a->ninst) {
+        if (!a->bvh) {
+            miss(ray, hit);
+            if (st)
+                st->rays++;
+            return SC_OK;
+        }
+        sc_status s = sc_trace_closest(a->bvh, ray, hit, st);
+        map_ids(a->bvh, hit);
+        return s;
+    }
+    miss(ray, hit);
+    top_trace(a, ray, hit, 0, st);
+    if (st)
+        st->rays++;
+    return SC_OK;
+}
+
+sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_trace_stats *st)
+{
+    if (!a || !ray || !occluded || !a->committed || !sc_ray_valid(ray))
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!a->ninst) {
+        if (!a->bvh) {
+            *occluded = 0;
+            if (st)
+                st->rays++;
+            return SC_OK;
+        }
+        return sc_trace_any(a->bvh, ray, occluded, st);
+    }
+    *occluded = top_trace(a, ray, NULL, 1, st);
+    if (st)
+        st->rays++;
+    return SC_OK;
+}
+
+sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
+                             size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *st)
+{
+    if (!a || (n && (!rays || !hits)) || ray_stride < sizeof(sc_ray) || hit_stride < sizeof(sc_hitrec) ||
+        flags || !a->committed)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!a->ninst && a->bvh) {
+        sc_status s = sc_trace_closest_n(a->bvh, rays, ray_stride, hits, hit_stride, n, flags, st);
+        if (a->bvh->mesh_count > 1)
+            for (size_t i = 0; i < n; i++)
+                map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
+        return s;
+    }
+    sc_status s = SC_OK;
+    for (size_t i = 0; i < n; i++) {
+        const sc_ray *r = (const sc_ray *)(const void *)((const char *)rays + i * ray_stride);
+        if (sc_accel_closest(a, r, (sc_hitrec *)(void *)((char *)hits + i * hit_stride), st) != SC_OK)
+            s = SC_ERR_INVALID_ARGUMENT;
+    }
+    return s;
+}
+
+sc_status sc_accel_any_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
+                         size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *st)
+{
+    if (!a || (n && (!rays || !occluded)) || ray_stride < sizeof(sc_ray) || occluded_stride < sizeof(int32_t) ||
+        flags || !a->committed)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!a->ninst && a->bvh)
+        return sc_trace_any_n(a->bvh, rays, ray_stride, occluded, occluded_stride, n, flags, st);
+    sc_status s = SC_OK;
+    for (size_t i = 0; i < n; i++) {
+        const sc_ray *r = (const sc_ray *)(const void *)((const char *)rays + i * ray_stride);
+        int o = 0;
+        if (sc_accel_any(a, r, &o, st) != SC_OK)
+            s = SC_ERR_INVALID_ARGUMENT;
+        else
+            *(int32_t *)(void *)((char *)occluded + i * occluded_stride) = o;
+    }
+    return s;
+}
+
+sc_status sc_accel_get_info(const sc_accel *a, sc_accel_info *info)
+{
+    if (!a || !info)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->meshes = a->nmesh;
+    info->instances = a->ninst;
+    for (size_t g = 0; g < a->nmesh; g++) {
+        info->triangles += a->views[g].triangle_count;
+        if (a->copies[g])
+            info->bytes += 12 * (a->views[g].vertex_count + a->views[g].triangle_count);
+    }
+    for (size_t i = 0; i < a->ninst; i++)
+        for (size_t g = 0; g < a->inst[i].obj->nmesh; g++)
+            info->instanced_triangles += a->inst[i].obj->views[g].triangle_count;
+    info->bytes += sizeof *a + a->cap_mesh * (sizeof *a->views + sizeof *a->copies) +
+                   a->cap_inst * sizeof *a->inst + a->top_nodes * sizeof(sc_bvh_node8);
+    if (a->bvh) {
+        sc_bvh_info bi;
+        sc_bvh_get_info(a->bvh, &bi);
+        info->bytes += bi.total_bytes;
+        info->sah_growth = bi.built_sah_cost > 0 ? bi.sah_cost / bi.built_sah_cost : 1;
+    } else {
+        info->sah_growth = 1;
+    }
+    info->build_seconds = a->build_seconds;
+    info->builds = a->builds;
+    info->refits = a->refits;
+    info->committed = a->committed;
+    return SC_OK;
+}

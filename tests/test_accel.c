@@ -1,0 +1,811 @@
+/* The scene handle (sc_accel.h): several meshes under one tree report the
+ * ids and hits of separate trees; instances report what tracing each
+ * instance's rounded object-space ray on its own reports, and that is the
+ * exact first hit (MPFR oracle) for that ray; closed meshes seen through
+ * instances have no holes; a refit answers as a fresh build over the moved
+ * vertices, its spheres still contain their triangles (MPFR), and it
+ * rebuilds past the growth limit or on a non-finite vertex; bad arguments
+ * are refused. */
+#include <float.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+#include <mpfr.h>
+
+#include "bvh/bvh_internal.h"
+#include "compare/oracle.h"
+#include "sc_ftz.h"
+#include "sc_test_meshes.h"
+#include "spherecull/sc_accel.h"
+#include "spherecull/sc_bvh.h"
+#include "spherecull/sc_trace.h"
+
+static uint64_t rng_state = 0x1234567ull;
+static double rnd(void)
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rng_state >> 11) * 0x1p-53;
+}
+static double rnd_in(double a, double b) { return a + (b - a) * rnd(); }
+
+static void random_dir(float d[3])
+{
+    double z = rnd_in(-1, 1), phi = rnd_in(0, 6.283185307179586), s = sqrt(1 - z * z);
+    d[0] = (float)(s * cos(phi)), d[1] = (float)(s * sin(phi)), d[2] = (float)z;
+}
+
+/* Rays from a box around the scene towards points in it; every fourth one
+ * aimed at a vertex of `aim` (edges and vertices are where trees disagree). */
+static void make_rays(sc_ray *rays, size_t n, const float lo[3], const float hi[3], const float *aim, size_t naim)
+{
+    for (size_t i = 0; i < n; i++) {
+        float o[3], p[3];
+        for (int k = 0; k < 3; k++) {
+            double c = 0.5 * (lo[k] + hi[k]), h = 0.5 * (hi[k] - lo[k]) + 0.1;
+            o[k] = (float)(c + rnd_in(-2, 2) * h);
+            p[k] = (float)(c + rnd_in(-1, 1) * h);
+        }
+        if (aim && i % 4 == 0) {
+            size_t v = (size_t)(rnd() * (double)naim) % naim;
+            memcpy(p, aim + 3 * v, sizeof p);
+        }
+        sc_ray r = { { o[0], o[1], o[2] }, 0, { p[0] - o[0], p[1] - o[1], p[2] - o[2] }, INFINITY };
+        if (r.dir[0] == 0 && r.dir[1] == 0 && r.dir[2] == 0)
+            r.dir[2] = 1;
+        if (i % 7 == 3)
+            r.tmax = 0.9f;   /* some rays end before the surface */
+        rays[i] = r;
+    }
+}
+
+static int same_bits(const sc_hitrec *a, const sc_hitrec *b)
+{
+    return memcmp(&a->t, &b->t, 4) == 0 && memcmp(&a->u, &b->u, 4) == 0 && memcmp(&a->v, &b->v, 4) == 0 &&
+           a->prim == b->prim && a->geom == b->geom && a->inst == b->inst;
+}
+
+/* ---- several meshes under one tree --------------------------------------- */
+
+static void test_meshes(void **state)
+{
+    (void)state;
+    mesh m[3];
+    const double o0[3] = { 0, 0, 0 }, o1[3] = { 1.5, 0.4, 0.2 };
+    torus(&m[0], 24, 12, o0, 1.0);
+    grid_box(&m[1], 6, 0);
+    torus(&m[2], 16, 10, o1, 0.6);
+    /* mesh 1 as float4 vertices, to cover strides */
+    float *p4 = malloc(16 * (size_t)m[1].nv);
+    for (uint32_t i = 0; i < m[1].nv; i++)
+        memcpy(p4 + 4 * i, m[1].pos + 3 * i, 12), p4[4 * i + 3] = 0;
+    const sc_mesh_view views[4] = { { m[0].pos, m[0].nv, m[0].idx, m[0].nt, 0, 0 },
+                                    { m[0].pos, 0, NULL, 0, 0, 0 },   /* empty */
+                                    { p4, m[1].nv, m[1].idx, m[1].nt, 16, 0 },
+                                    { m[2].pos, m[2].nv, m[2].idx, m[2].nt, 0, 0 } };
+    const size_t N = 4000;
+    sc_ray *rays = malloc(N * sizeof *rays);
+    const float lo[3] = { -1.5f, -1.5f, -3 }, hi[3] = { 2.5f, 2, 1 };
+    make_rays(rays, N, lo, hi, m[0].pos, m[0].nv);
+    sc_hitrec *stream = malloc(N * sizeof *stream);
+    for (int test = 0; test < 2; test++)
+        for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode++) {
+            sc_bvh_config cfg;
+            sc_bvh_config_default(&cfg);
+            cfg.prefilter = (sc_prefilter_mode)mode;
+            cfg.tri_test = test ? SC_TRI_MOLLER : SC_TRI_WATERTIGHT;
+            cfg.leaf_size = 4 + 4 * (mode % 2);
+            sc_accel *a;
+            assert_int_equal(sc_accel_new(&cfg, &a), SC_OK);
+            uint32_t id;
+            for (uint32_t g = 0; g < 4; g++) {
+                assert_int_equal(sc_accel_attach_mesh(a, &views[g], g % 2 ? SC_ACCEL_COPY : SC_ACCEL_SHARED, &id),
+                                 SC_OK);
+                assert_int_equal(id, g);
+            }
+            sc_bvh *sep[4] = { 0 };
+            for (int g = 0; g < 4; g++)
+                assert_int_equal(sc_bvh_build(&views[g], &cfg, &sep[g]), SC_OK);
+            sc_ray r0 = rays[0];
+            sc_hitrec h;
+            assert_int_equal(sc_accel_closest(a, &r0, &h, NULL), SC_ERR_INVALID_ARGUMENT);   /* not committed */
+            assert_int_equal(sc_accel_commit(a), SC_OK);
+            assert_int_equal(sc_accel_closest_n(a, rays, sizeof *rays, stream, sizeof *stream, N, 0, NULL), SC_OK);
+            size_t hits = 0, per_geom[4] = { 0 };
+            for (size_t i = 0; i < N; i++) {
+                sc_hitrec want;
+                memset(&want, 0, sizeof want);
+                want.prim = SC_HITREC_MISS;
+                want.t = rays[i].tmax;
+                for (uint32_t g = 0; g < 4; g++) {
+                    sc_hitrec s;
+                    assert_int_equal(sc_trace_closest(sep[g], &rays[i], &s, NULL), SC_OK);
+                    if (s.prim == SC_HITREC_MISS)
+                        continue;
+                    s.geom = g;
+                    if (want.prim == SC_HITREC_MISS || s.t < want.t)
+                        want = s;
+                }
+                if (want.prim == SC_HITREC_MISS)
+                    want.geom = want.inst = SC_INVALID_ID;
+                assert_int_equal(sc_accel_closest(a, &rays[i], &h, NULL), SC_OK);
+                if (!same_bits(&h, &want))
+                    fail_msg("mode %d test %d ray %zu: accel (t %a prim %u geom %u) separate (t %a prim %u geom %u)",
+                             mode, test, i, h.t, h.prim, h.geom, want.t, want.prim, want.geom);
+                assert_memory_equal(h.ng, want.ng, sizeof h.ng);
+                assert_true(same_bits(&stream[i], &h));
+                int occ;
+                assert_int_equal(sc_accel_any(a, &rays[i], &occ, NULL), SC_OK);
+                assert_int_equal(occ, h.prim != SC_HITREC_MISS);
+                if (h.prim != SC_HITREC_MISS)
+                    hits++, per_geom[h.geom]++;
+            }
+            /* the rays reach every non-empty mesh */
+            assert_true(hits > N / 4);
+            assert_true(per_geom[0] > 50 && per_geom[2] > 50 && per_geom[3] > 20);
+            assert_int_equal(per_geom[1], 0);
+            sc_accel_info info;
+            assert_int_equal(sc_accel_get_info(a, &info), SC_OK);
+            assert_int_equal(info.meshes, 4);
+            assert_int_equal(info.triangles, m[0].nt + m[1].nt + m[2].nt);
+            assert_int_equal(info.builds, 1);
+            for (int g = 0; g < 4; g++)
+                sc_bvh_free(sep[g]);
+            sc_accel_release(a);
+        }
+    free(stream);
+    free(rays);
+    free(p4);
+    for (int i = 0; i < 3; i++)
+        mesh_free(&m[i]);
+}
+
+/* ---- instances -------------------------------------------------------------- */
+
+/* A transform: rotation about a random axis, per-axis scale (a mirror when
+ * mirror), translation. */
+static void random_xfm(float x[12], double scale, double aniso, int mirror, double tr)
+{
+    float ax[3];
+    random_dir(ax);
+    double ang = rnd_in(0, 6.283185307179586), c = cos(ang), s = sin(ang), C = 1 - c;
+    double R[3][3] = { { c + ax[0] * ax[0] * C, ax[0] * ax[1] * C - ax[2] * s, ax[0] * ax[2] * C + ax[1] * s },
+                       { ax[1] * ax[0] * C + ax[2] * s, c + ax[1] * ax[1] * C, ax[1] * ax[2] * C - ax[0] * s },
+                       { ax[2] * ax[0] * C - ax[1] * s, ax[2] * ax[1] * C + ax[0] * s, c + ax[2] * ax[2] * C } };
+    double S[3] = { scale, scale * rnd_in(1, aniso), scale * rnd_in(1, aniso) };
+    if (mirror)
+        S[1] = -S[1];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++)
+            x[4 * i + j] = (float)(R[i][j] * S[j]);
+        x[4 * i + 3] = (float)rnd_in(-tr, tr);
+    }
+}
+
+/* An axis-aligned transform: the axes permuted, scaled, some flipped. */
+static void aligned_xfm(float x[12], double scale, int mirror, double tr)
+{
+    static const int perms[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 }, { 2, 1, 0 } };
+    const int *pm = perms[(int)(rnd() * 6) % 6];
+    memset(x, 0, 12 * sizeof(float));
+    for (int i = 0; i < 3; i++) {
+        x[4 * i + pm[i]] = (float)(scale * rnd_in(1, 1.5) * (mirror && i == 0 ? -1 : 1));
+        x[4 * i + 3] = (float)rnd_in(-tr, tr);
+    }
+}
+
+static void xfm_point(const float x[12], const double p[3], double out[3])
+{
+    for (int i = 0; i < 3; i++)
+        out[i] = x[4 * i] * p[0] + x[4 * i + 1] * p[1] + x[4 * i + 2] * p[2] + x[4 * i + 3];
+}
+
+/* The object-space ray of the library against M^-1 (o - T), M^-1 d in
+ * MPFR: each component within 2^-23 relative (one float rounding of the
+ * double result, which is within 2^-40 of exact for these transforms). */
+static void check_instance_ray(const float x[12], const sc_ray *w, const sc_ray *o)
+{
+    mpfr_t m[3][3], c[3][3], det, acc, tmp, e;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            mpfr_init2(m[i][j], 256), mpfr_init2(c[i][j], 256);
+            mpfr_set_flt(m[i][j], x[4 * i + j], MPFR_RNDN);
+        }
+    mpfr_inits2(256, det, acc, tmp, e, (mpfr_ptr)0);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {   /* cofactor of m[j][i]: inv[i][j] = c[i][j] / det */
+            int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+            mpfr_mul(acc, m[r0][c0], m[r1][c1], MPFR_RNDN);
+            mpfr_mul(tmp, m[r0][c1], m[r1][c0], MPFR_RNDN);
+            mpfr_sub(c[i][j], acc, tmp, MPFR_RNDN);
+        }
+    mpfr_set_ui(det, 0, MPFR_RNDN);
+    for (int j = 0; j < 3; j++) {
+        mpfr_mul(tmp, m[0][j], c[j][0], MPFR_RNDN);
+        mpfr_add(det, det, tmp, MPFR_RNDN);
+    }
+    for (int i = 0; i < 3; i++)
+        for (int which = 0; which < 2; which++) {
+            mpfr_set_ui(acc, 0, MPFR_RNDN);
+            for (int j = 0; j < 3; j++) {
+                if (which == 0) {
+                    mpfr_set_flt(e, w->org[j], MPFR_RNDN);
+                    mpfr_set_flt(tmp, x[4 * j + 3], MPFR_RNDN);
+                    mpfr_sub(e, e, tmp, MPFR_RNDN);
+                } else {
+                    mpfr_set_flt(e, w->dir[j], MPFR_RNDN);
+                }
+                mpfr_mul(e, e, c[i][j], MPFR_RNDN);
+                mpfr_add(acc, acc, e, MPFR_RNDN);
+            }
+            mpfr_div(acc, acc, det, MPFR_RNDN);
+            double exact = mpfr_get_d(acc, MPFR_RNDN);
+            double got = which == 0 ? o->org[i] : o->dir[i];
+            if (!(fabs(got - exact) <= 0x1p-23 * fabs(exact) + 0x1p-126))
+                fail_msg("object ray component %d/%d: %a against exact %a", which, i, got, exact);
+        }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            mpfr_clears(m[i][j], c[i][j], (mpfr_ptr)0);
+    mpfr_clears(det, acc, tmp, e, (mpfr_ptr)0);
+}
+
+#define NINST 24
+
+/* The world: NINST instances of an object of two meshes (one mirrored, one
+ * anisotropic, ...) plus a ground mesh of its own. Checked ray by ray
+ * against each instance traced on its own through its object scene. */
+static void test_instances(void **state)
+{
+    (void)state;
+    for (int test = 0; test < 2; test++) {
+        mesh tor, box, ground;
+        const double o0[3] = { 0, 0, 0 };
+        torus(&tor, 20, 10, o0, 1.0);
+        grid_box(&box, 4, 0);
+        grid_box(&ground, 8, 0);
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.tri_test = test ? SC_TRI_EXACT : SC_TRI_WATERTIGHT;
+        cfg.prefilter = test ? SC_PREFILTER_COMPACT : SC_PREFILTER_OFF;
+        sc_accel *obj, *world;
+        assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+        const sc_mesh_view vt = { tor.pos, tor.nv, tor.idx, tor.nt, 0, 0 }, vb = { box.pos, box.nv, box.idx, box.nt, 0, 0 };
+        assert_int_equal(sc_accel_attach_mesh(obj, &vt, SC_ACCEL_COPY, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(obj, &vb, SC_ACCEL_COPY, NULL), SC_OK);
+        assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+        float x[NINST][12];
+        /* not committed yet: refused */
+        random_xfm(x[0], 1, 1, 0, 1);
+        assert_int_equal(sc_accel_attach_instance(world, obj, x[0], NULL), SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal(sc_accel_commit(obj), SC_OK);
+        for (int i = 0; i < NINST; i++) {
+            if (i % 4 == 2)
+                aligned_xfm(x[i], rnd_in(0.3, 2), i % 8 == 2, 6);
+            else
+                random_xfm(x[i], rnd_in(0.3, 2), i % 3 ? 1 : 3, i % 4 == 1, 6);
+            uint32_t id;
+            assert_int_equal(sc_accel_attach_instance(world, obj, x[i], &id), SC_OK);
+            assert_int_equal(id, (uint32_t)i);
+        }
+        const sc_mesh_view vg = { ground.pos, ground.nv, ground.idx, ground.nt, 0, 0 };
+        assert_int_equal(sc_accel_attach_mesh(world, &vg, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(world), SC_OK);
+        sc_bvh *gbvh;
+        assert_int_equal(sc_bvh_build(&vg, &cfg, &gbvh), SC_OK);
+
+        /* aim at the world images of the torus vertices */
+        float *aim = malloc(12 * (size_t)tor.nv * NINST);
+        for (int i = 0; i < NINST; i++)
+            for (uint32_t v = 0; v < tor.nv; v++) {
+                const double p[3] = { tor.pos[3 * v], tor.pos[3 * v + 1], tor.pos[3 * v + 2] };
+                double w[3];
+                xfm_point(x[i], p, w);
+                for (int k = 0; k < 3; k++)
+                    aim[3 * ((size_t)i * tor.nv + v) + k] = (float)w[k];
+            }
+        const size_t N = 3000;
+        sc_ray *rays = malloc(N * sizeof *rays);
+        const float lo[3] = { -8, -8, -8 }, hi[3] = { 8, 8, 8 };
+        make_rays(rays, N, lo, hi, aim, (size_t)tor.nv * NINST);
+        /* A third of the rays aimed next to the object's vertices that are
+         * extreme along a world axis in the axis-aligned instances (i % 4
+         * == 2): there the object's box maps onto the instance's world box,
+         * so these hits lie on its faces, where the top level could cull
+         * them. */
+        for (size_t r = 0; r < N / 3; r++) {
+            const int i = 2 + 4 * (int)(r % (NINST / 4)), k = (int)(r / NINST) % 3,
+                      hi_side = (int)(r / (3 * NINST)) % 2;
+            const mesh *ms[2] = { &tor, &box };
+            const mesh *bm = &tor;
+            uint32_t best = 0;
+            double bw[3] = { 0 };
+            for (int g = 0; g < 2; g++)
+                for (uint32_t v = 0; v < ms[g]->nv; v++) {
+                    const double q[3] = { ms[g]->pos[3 * v], ms[g]->pos[3 * v + 1], ms[g]->pos[3 * v + 2] };
+                    double w[3];
+                    xfm_point(x[i], q, w);
+                    if ((g == 0 && v == 0) || (hi_side ? w[k] > bw[k] : w[k] < bw[k]))
+                        bm = ms[g], best = v, memcpy(bw, w, sizeof w);
+                }
+            /* a point on an edge of that vertex, close to it: the hit is
+             * within a hair of the box face */
+            uint32_t nb = best;
+            for (uint32_t t = 0; t < bm->nt && nb == best; t++)
+                for (int c = 0; c < 3; c++)
+                    if (bm->idx[3 * t + (uint32_t)c] == best)
+                        nb = bm->idx[3 * t + (uint32_t)(c + 1) % 3];
+            const double qn[3] = { bm->pos[3 * nb], bm->pos[3 * nb + 1], bm->pos[3 * nb + 2] };
+            double wn[3];
+            xfm_point(x[i], qn, wn);
+            const double f = rnd_in(0.001, 0.05);
+            float p[3];
+            for (int c = 0; c < 3; c++)
+                p[c] = (float)(bw[c] + f * (wn[c] - bw[c]));
+            float d[3];
+            random_dir(d);
+            if ((d[k] > 0) == hi_side)
+                d[k] = -d[k];   /* from outside the box face */
+            if (r % 2)
+                d[k] *= 1e-3f;   /* grazing the face: it never goes deep into the box */
+            /* from just before the point, so that no other instance is in the way */
+            const float back = 0.02f / sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            sc_ray q = { { p[0] - back * d[0], p[1] - back * d[1], p[2] - back * d[2] }, 0, { d[0], d[1], d[2] }, INFINITY };
+            if (r % 2)
+                q.tmax = 2 * back;   /* and ends just after it: the segment stays within a hair of the face */
+            rays[r] = q;
+        }
+        /* The exact first hit of every instance's object ray (MPFR), over
+         * the object's two meshes as one (prim = first[geom] + prim). */
+        sc_oracle orc = { 0 };
+        sc_ray *orays = malloc(N * NINST * sizeof *orays);
+        for (size_t r = 0; r < N; r++)
+            for (int i = 0; i < NINST; i++)
+                assert_int_equal(sc_accel_instance_ray(world, (uint32_t)i, &rays[r], &orays[r * NINST + i]), SC_OK);
+        if (test) {
+            mesh both;
+            both.nv = tor.nv + box.nv, both.nt = tor.nt + box.nt;
+            both.pos = malloc(12 * (size_t)both.nv);
+            both.idx = malloc(12 * (size_t)both.nt);
+            memcpy(both.pos, tor.pos, 12 * (size_t)tor.nv);
+            memcpy(both.pos + 3 * (size_t)tor.nv, box.pos, 12 * (size_t)box.nv);
+            memcpy(both.idx, tor.idx, 12 * (size_t)tor.nt);
+            for (size_t k = 0; k < 3 * (size_t)box.nt; k++)
+                both.idx[3 * (size_t)tor.nt + k] = box.idx[k] + tor.nv;
+            const sc_mesh_view bv = { both.pos, both.nv, both.idx, both.nt, 0, 0 };
+            sc_checked_mesh cm;
+            assert_int_equal(sc_mesh_check(&bv, &cm), SC_OK);
+            assert_int_equal(sc_oracle_run(&cm, orays, N * NINST, 2, 0, &orc), SC_OK);
+            /* the oracle keeps no pointer to the mesh */
+            mesh_free(&both);
+        }
+        size_t hits = 0, inst_hits = 0, ties = 0;
+        for (size_t r = 0; r < N; r++) {
+            sc_hitrec h, want;
+            memset(&want, 0, sizeof want);
+            want.prim = SC_HITREC_MISS;
+            want.t = rays[r].tmax;
+            want.geom = want.inst = SC_INVALID_ID;
+            /* each instance on its own, in id order, then the ground */
+            for (int i = 0; i <= NINST; i++) {
+                sc_hitrec s;
+                sc_ray o = i < NINST ? orays[r * NINST + i] : rays[r];
+                if (i < NINST && r % 16 == 0)
+                    check_instance_ray(x[i], &rays[r], &o);
+                o.tmax = want.t;
+                if (i < NINST) {
+                    if (o.dir[0] == 0 && o.dir[1] == 0 && o.dir[2] == 0)
+                        continue;
+                    assert_int_equal(sc_accel_closest(obj, &o, &s, NULL), SC_OK);
+                    s.inst = (uint32_t)i;
+                } else {
+                    assert_int_equal(sc_trace_closest(gbvh, &o, &s, NULL), SC_OK);
+                }
+                if (s.prim != SC_HITREC_MISS && (want.prim == SC_HITREC_MISS || s.t < want.t))
+                    want = s;
+            }
+            assert_int_equal(sc_accel_closest(world, &rays[r], &h, NULL), SC_OK);
+            if (h.prim != want.prim || h.geom != want.geom)
+                ties++;
+            if (memcmp(&h.t, &want.t, 4) != 0 || h.inst != want.inst || (!test && !same_bits(&h, &want)))
+                fail_msg("test %d ray %zu: world (t %a inst %u geom %u prim %u) against each instance (t %a inst %u "
+                         "geom %u prim %u)", test, r, h.t, h.inst, h.geom, h.prim, want.t, want.inst, want.geom,
+                         want.prim);
+            if (test) {
+                /* exact: the hit is the exact first hit of its instance's
+                 * ray, and no instance's ray has an exact hit before it */
+                if (h.inst != SC_INVALID_ID) {
+                    uint32_t gp = h.prim + (h.geom ? tor.nt : 0);
+                    assert_true(orc.hits[r * NINST + h.inst].hit);
+                    assert_true(sc_oracle_accepts(&orc, r * NINST + h.inst, gp));
+                }
+                for (int i = 0; i < NINST; i++) {
+                    const sc_oracle_hit *oh = &orc.hits[r * NINST + i];
+                    if (oh->hit && !(oh->t >= h.t * (1 - 1e-6)))
+                        fail_msg("ray %zu: instance %d has an exact hit at %.17g before the reported %.9g", r, i,
+                                 oh->t, (double)h.t);
+                }
+            }
+            if (h.prim != SC_HITREC_MISS) {
+                hits++;
+                inst_hits += h.inst != SC_INVALID_ID;
+                /* the world normal is the cross product of the transformed edges */
+                if (h.inst != SC_INVALID_ID) {
+                    const mesh *mm = h.geom == 0 ? &tor : &box;
+                    double P[3][3];
+                    for (int c = 0; c < 3; c++) {
+                        const float *v = mm->pos + 3 * mm->idx[3 * h.prim + (uint32_t)c];
+                        const double p[3] = { v[0], v[1], v[2] };
+                        xfm_point(x[h.inst], p, P[c]);
+                    }
+                    double e1[3], e2[3], n[3];
+                    for (int k = 0; k < 3; k++)
+                        e1[k] = P[1][k] - P[0][k], e2[k] = P[2][k] - P[0][k];
+                    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+                    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+                    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+                    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                    for (int k = 0; k < 3; k++)
+                        assert_true(fabs(h.ng[k] - n[k]) <= 1e-4 * len);
+                }
+            }
+            int occ;
+            assert_int_equal(sc_accel_any(world, &rays[r], &occ, NULL), SC_OK);
+            assert_int_equal(occ, h.prim != SC_HITREC_MISS);
+        }
+        print_message("test %d: %zu of %zu rays hit, %zu through instances; %zu exact ties\n", test, hits, N,
+                      inst_hits, ties);
+        sc_oracle_free(&orc);
+        free(orays);
+        sc_bvh_free(gbvh);
+        assert_true(hits > N / 4);
+        assert_true(inst_hits > N / 8);
+        sc_accel_info info;
+        assert_int_equal(sc_accel_get_info(world, &info), SC_OK);
+        assert_int_equal(info.instances, NINST);
+        assert_int_equal(info.instanced_triangles, (size_t)NINST * (tor.nt + box.nt));
+        free(aim);
+        free(rays);
+        /* either order: the world holds its own reference to obj */
+        if (test) {
+            sc_accel_release(obj);
+            sc_accel_release(world);
+        } else {
+            sc_accel_release(world);
+            sc_accel_release(obj);
+        }
+        mesh_free(&tor), mesh_free(&box), mesh_free(&ground);
+    }
+}
+
+
+/* ---- no holes through instances ------------------------------------------ */
+
+/* Rays from inside a closed torus seen through instances (rotated, mirrored,
+ * anisotropic, tiny, huge, far off) in every direction, some aimed at its
+ * vertices: every one hits the instance it starts in (or one nearer). */
+static void test_no_holes(void **state)
+{
+    (void)state;
+    mesh tor;
+    const double o0[3] = { 0, 0, 0 };
+    torus(&tor, 36, 18, o0, 1.0);
+    for (int test = 0; test < 2; test++) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.tri_test = test ? SC_TRI_EXACT : SC_TRI_WATERTIGHT;
+        sc_accel *obj, *world;
+        assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+        const sc_mesh_view vt = { tor.pos, tor.nv, tor.idx, tor.nt, 0, 0 };
+        assert_int_equal(sc_accel_attach_mesh(obj, &vt, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(obj), SC_OK);
+        assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+        enum { K = 8 };
+        float x[K][12];
+        const double scales[K] = { 1, 0.37, 2.9, 1e-3, 1e3, 1, 0.8, 5 };
+        const double shifts[K] = { 0, 3, 10, 1, 4e3, 1e4, 20, 50 };
+        for (int i = 0; i < K; i++) {
+            if (i % 3 == 2)
+                aligned_xfm(x[i], scales[i], i == 5, 0);
+            else
+                random_xfm(x[i], scales[i], i % 2 ? 2.5 : 1, i == 1 || i == 6, 0);
+            /* instances far apart, so a ray from inside one meets it first */
+            x[i][3] = (float)(shifts[i] + 3e3 * i);
+            x[i][7] = (float)(-shifts[i]);
+            x[i][11] = (float)(0.5 * shifts[i]);
+            if (scales[i] < 0.01)   /* near the origin: world floats resolve its tube */
+                x[i][3] = x[i][7] = x[i][11] = -5;
+            assert_int_equal(sc_accel_attach_instance(world, obj, x[i], NULL), SC_OK);
+        }
+        assert_int_equal(sc_accel_commit(world), SC_OK);
+        size_t rays = 0, missed = 0;
+        for (int i = 0; i < K; i++)
+            for (int r = 0; r < 4000; r++) {
+                /* a point on the tube's centre circle, in world space */
+                double u = rnd_in(0, 6.283185307179586), q[3] = { cos(u), sin(u), 0 }, w[3];
+                double rr = rnd_in(0, 0.2);   /* within the tube of radius 0.35 */
+                q[0] += rr * cos(u), q[1] += rr * sin(u);
+                place(q, o0, 1.0);   /* as torus() placed its vertices */
+                xfm_point(x[i], q, w);
+                sc_ray ray = { { (float)w[0], (float)w[1], (float)w[2] }, 0, { 0, 0, 0 }, INFINITY };
+                if (r % 2) {
+                    random_dir(ray.dir);
+                } else {
+                    uint32_t v = (uint32_t)(rnd() * tor.nv) % tor.nv;
+                    const double p[3] = { tor.pos[3 * v], tor.pos[3 * v + 1], tor.pos[3 * v + 2] };
+                    double pw[3];
+                    xfm_point(x[i], p, pw);
+                    for (int k = 0; k < 3; k++)
+                        ray.dir[k] = (float)(pw[k] - w[k]);
+                }
+                sc_hitrec h;
+                assert_int_equal(sc_accel_closest(world, &ray, &h, NULL), SC_OK);
+                int occ;
+                assert_int_equal(sc_accel_any(world, &ray, &occ, NULL), SC_OK);
+                rays++;
+                if (h.prim == SC_HITREC_MISS || h.inst != (uint32_t)i || !occ) {
+                    missed++;
+                    print_message("test %d instance %d: ray from inside missed (inst %u, occluded %d)\n", test, i,
+                                  h.inst, occ);
+                }
+            }
+        print_message("%s: %zu rays from inside 8 instances, %zu missed\n", test ? "exact" : "watertight", rays,
+                      missed);
+        assert_int_equal(missed, 0);
+        sc_accel_release(world);
+        sc_accel_release(obj);
+    }
+    mesh_free(&tor);
+}
+
+/* ---- refit -------------------------------------------------------------------- */
+
+/* A height field z = f(x, y) on an n x n grid, with a wave of amplitude amp. */
+static void wave(float *pos, int n, double amp, double phase)
+{
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++) {
+            double x = (double)i / n, y = (double)j / n;
+            float *p = pos + 3 * ((size_t)i * (n + 1) + j);
+            p[0] = (float)x, p[1] = (float)y;
+            p[2] = (float)(amp * sin(6.283185307179586 * (x + phase)) * cos(9.42 * y + phase));
+        }
+}
+
+/* Every sphere and summary of the tree contains its triangle (MPFR). */
+static void check_spheres(const sc_bvh *bvh, const float *pos, const uint32_t *idx)
+{
+    mpfr_t d, s, r2;
+    mpfr_inits2(1024, d, s, r2, (mpfr_ptr)0);
+    size_t checked = 0;
+    for (size_t ni = 0; ni < bvh->node_count; ni++)
+        for (int c = 0; c < SC_BVH_N; c++) {
+            const uint64_t ref = bvh->nodes[ni].child[c];
+            if (!ref || !sc_ref_is_leaf(ref) || !(sc_ref_has_spheres(ref) || sc_ref_has_summary(ref)))
+                continue;
+            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+            const float *head = sc_leaf_block(bvh->leaves, ref);
+            _Alignas(64) float blk[64];
+            if (sc_ref_has_summary(ref))
+                sc_leaf_summary_decode(head, W, blk);
+            else
+                memcpy(blk, head, 16 * W);
+            const uint32_t *prims = sc_leaf_prims(sc_leaf_rows(head, W, ref), W);
+            for (unsigned i = 0; i < n; i++) {
+                mpfr_set_flt(r2, blk[3 * W + i], MPFR_RNDN);
+                for (int j = 0; j < 3; j++) {
+                    const float *V = pos + 3 * idx[3 * prims[i] + (uint32_t)j];
+                    mpfr_set_ui(s, 0, MPFR_RNDN);
+                    for (int k = 0; k < 3; k++) {
+                        mpfr_set_flt(d, V[k], MPFR_RNDN);
+                        mpfr_sub_d(d, d, blk[k * W + i], MPFR_RNDN);
+                        mpfr_fma(s, d, d, s, MPFR_RNDN);
+                    }
+                    assert_true(mpfr_cmp(s, r2) <= 0);
+                }
+                checked++;
+            }
+        }
+    assert_true(checked > 0);
+    mpfr_clears(d, s, r2, (mpfr_ptr)0);
+}
+
+/* Refits of a moving wave answer as fresh builds over the moved vertices,
+ * bit for bit, in every prefilter mode; a large change rebuilds; a
+ * non-finite vertex rebuilds (sc_accel) or is refused with the tree
+ * unchanged (sc_bvh_refit). */
+static void test_refit(void **state)
+{
+    (void)state;
+    const int n = 40;
+    const size_t nv = (size_t)(n + 1) * (n + 1), nt = 2 * (size_t)n * n;
+    float *pos = malloc(12 * nv), *moved = malloc(12 * nv);
+    uint32_t *idx = malloc(12 * nt);
+    for (int i = 0, t = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            uint32_t a = (uint32_t)(i * (n + 1) + j), b = a + 1, c = a + (uint32_t)n + 1, d = c + 1;
+            const uint32_t q[6] = { a, b, d, a, d, c };
+            memcpy(idx + 3 * t, q, sizeof q);
+            t += 2;
+        }
+    const size_t N = 3000;
+    sc_ray *rays = malloc(N * sizeof *rays);
+    const float lo[3] = { 0, 0, -0.3f }, hi[3] = { 1, 1, 0.3f };
+    for (int mode = 0; mode < SC_PREFILTER_MODE_COUNT; mode++) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.prefilter = (sc_prefilter_mode)mode;
+        cfg.leaf_size = mode == SC_PREFILTER_AUTO ? 16 : 8;
+        wave(pos, n, 0.05, 0);
+        sc_accel *a;
+        assert_int_equal(sc_accel_new(&cfg, &a), SC_OK);
+        const sc_mesh_view v = { pos, nv, idx, nt, 0, 0 };
+        assert_int_equal(sc_accel_attach_mesh(a, &v, SC_ACCEL_COPY, NULL), SC_OK);
+        assert_int_equal(sc_accel_refit(a), SC_OK);   /* never committed: builds */
+        sc_accel_info info;
+        assert_int_equal(sc_accel_get_info(a, &info), SC_OK);
+        assert_int_equal(info.builds, 1);
+        assert_int_equal(info.refits, 0);
+        for (int step = 1; step <= 6; step++) {
+            wave(moved, n, 0.05 + 0.01 * step, 0.01 * step);
+            assert_int_equal(sc_accel_update_vertices(a, 0, moved, 0), SC_OK);
+            assert_int_equal(sc_accel_refit(a), SC_OK);
+            assert_int_equal(sc_accel_get_info(a, &info), SC_OK);
+            assert_int_equal(info.builds, 1);
+            assert_int_equal(info.refits, (unsigned)step);
+            assert_true(info.sah_growth >= 0.5 && info.sah_growth <= SC_ACCEL_REBUILD_GROWTH);
+            const sc_mesh_view mv = { moved, nv, idx, nt, 0, 0 };
+            sc_bvh *fresh;
+            assert_int_equal(sc_bvh_build(&mv, &cfg, &fresh), SC_OK);
+            make_rays(rays, N, lo, hi, moved, nv);
+            for (size_t r = 0; r < N; r++) {
+                sc_hitrec h, w;
+                assert_int_equal(sc_accel_closest(a, &rays[r], &h, NULL), SC_OK);
+                assert_int_equal(sc_trace_closest(fresh, &rays[r], &w, NULL), SC_OK);
+                if (!same_bits(&h, &w))
+                    fail_msg("mode %d step %d ray %zu: refit (t %a prim %u) fresh (t %a prim %u)", mode, step, r, h.t,
+                             h.prim, w.t, w.prim);
+            }
+            sc_bvh_free(fresh);
+        }
+        /* the refitted tree's spheres contain their moved triangles */
+        if (mode != SC_PREFILTER_OFF)
+            for (int step = 0; step < 1; step++) {
+                sc_bvh *b;
+                const sc_mesh_view v0 = { pos, nv, idx, nt, 0, 0 }, mv = { moved, nv, idx, nt, 0, 0 };
+                assert_int_equal(sc_bvh_build(&v0, &cfg, &b), SC_OK);
+                assert_int_equal(sc_bvh_refit(b, &mv), SC_OK);
+                if (mode != SC_PREFILTER_AUTO)
+                    check_spheres(b, moved, idx);
+                /* refused: a non-finite vertex, another triangle count; the tree unchanged */
+                sc_bvh_info before, after;
+                assert_int_equal(sc_bvh_get_info(b, &before), SC_OK);
+                float keep = moved[3 * 7 + 2];
+                moved[3 * 7 + 2] = NAN;
+                assert_int_equal(sc_bvh_refit(b, &mv), SC_ERR_NONFINITE);
+                moved[3 * 7 + 2] = keep;
+                const sc_mesh_view fewer = { moved, nv, idx, nt - 1, 0, 0 };
+                assert_int_equal(sc_bvh_refit(b, &fewer), SC_ERR_INVALID_ARGUMENT);
+                assert_int_equal(sc_bvh_refit(NULL, &mv), SC_ERR_INVALID_ARGUMENT);
+                assert_int_equal(sc_bvh_get_info(b, &after), SC_OK);
+                assert_true(before.sah_cost == after.sah_cost);
+                if (mode != SC_PREFILTER_AUTO)
+                    check_spheres(b, moved, idx);
+                sc_bvh_free(b);
+            }
+        /* scrambled vertices: the refitted tree would be far worse, so it rebuilds */
+        for (size_t i = 0; i < nv; i++)
+            moved[3 * i + 2] = (float)((i * 7919 % 101) / 101.0 - 0.5);
+        assert_int_equal(sc_accel_update_vertices(a, 0, moved, 0), SC_OK);
+        assert_int_equal(sc_accel_refit(a), SC_OK);
+        assert_int_equal(sc_accel_get_info(a, &info), SC_OK);
+        assert_int_equal(info.builds, 2);
+        assert_true(info.sah_growth == 1);
+        /* a non-finite vertex: rebuilt, that triangle never hit */
+        moved[2] = INFINITY;
+        assert_int_equal(sc_accel_update_vertices(a, 0, moved, 0), SC_OK);
+        assert_int_equal(sc_accel_refit(a), SC_OK);
+        assert_int_equal(sc_accel_get_info(a, &info), SC_OK);
+        assert_int_equal(info.builds, 3);
+        sc_ray down = { { 0.001f, 0.004f, 5 }, 0, { 0, 0, -1 }, INFINITY };
+        sc_hitrec h;
+        assert_int_equal(sc_accel_closest(a, &down, &h, NULL), SC_OK);
+        assert_true(h.prim != 0);
+        sc_accel_release(a);
+    }
+    free(rays);
+    free(pos), free(moved), free(idx);
+}
+
+/* ---- bad arguments --------------------------------------------------------- */
+
+static void test_errors(void **state)
+{
+    (void)state;
+    mesh tor;
+    const double o0[3] = { 0, 0, 0 };
+    torus(&tor, 8, 6, o0, 1.0);
+    const sc_mesh_view v = { tor.pos, tor.nv, tor.idx, tor.nt, 0, 0 };
+    sc_accel *a, *b, *c;
+    assert_int_equal(sc_accel_new(NULL, NULL), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_config bad;
+    sc_bvh_config_default(&bad);
+    bad.leaf_size = 99;
+    assert_int_equal(sc_accel_new(&bad, &a), SC_OK);   /* the config is checked at the build */
+    assert_int_equal(sc_accel_attach_mesh(a, &v, SC_ACCEL_SHARED, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(a), SC_ERR_INVALID_ARGUMENT);
+    sc_accel_release(a);
+    assert_int_equal(sc_accel_new(NULL, &a), SC_OK);
+    assert_int_equal(sc_accel_new(NULL, &b), SC_OK);
+    assert_int_equal(sc_accel_new(NULL, &c), SC_OK);
+    sc_mesh_view w = v;
+    w.vertex_stride = 5;
+    assert_int_equal(sc_accel_attach_mesh(a, &w, 0, NULL), SC_ERR_INVALID_ARGUMENT);
+    w = v;
+    w.vertex_count = 3;   /* indices out of range */
+    assert_int_equal(sc_accel_attach_mesh(a, &w, 0, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_attach_mesh(a, &v, 7, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_attach_mesh(a, &v, SC_ACCEL_COPY, NULL), SC_OK);
+    assert_int_equal(sc_accel_update_vertices(a, 1, tor.pos, 0), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_update_vertices(a, 0, tor.pos, 7), SC_ERR_INVALID_ARGUMENT);
+    const float id[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+    float sing[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0 }, nan[12];
+    memcpy(nan, id, sizeof nan);
+    nan[3] = NAN;
+    assert_int_equal(sc_accel_attach_instance(b, a, id, NULL), SC_ERR_INVALID_ARGUMENT);   /* a not committed */
+    assert_int_equal(sc_accel_commit(a), SC_OK);
+    assert_int_equal(sc_accel_attach_instance(b, a, sing, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_attach_instance(b, a, nan, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_attach_instance(b, b, id, NULL), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_attach_instance(b, a, id, NULL), SC_OK);
+    assert_int_equal(sc_accel_set_transform(b, 1, id), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_set_transform(b, 0, sing), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_commit(b), SC_OK);
+    assert_int_equal(sc_accel_attach_instance(c, b, id, NULL), SC_ERR_INVALID_ARGUMENT);   /* two levels only */
+    /* aimed at the centre of triangle 0 */
+    float cen[3] = { 0, 0, 0 };
+    for (int k = 0; k < 3; k++)
+        for (int j = 0; j < 3; j++)
+            cen[k] += tor.pos[3 * tor.idx[j] + (uint32_t)k] / 3;
+    sc_ray ray = { { 0, 0, 5 }, 0, { cen[0], cen[1], cen[2] - 5 }, INFINITY }, o;
+    assert_int_equal(sc_accel_instance_ray(b, 1, &ray, &o), SC_ERR_INVALID_ARGUMENT);
+    sc_hitrec h;
+    assert_int_equal(sc_accel_closest(b, &ray, &h, NULL), SC_OK);
+    assert_int_equal(h.inst, 0);
+    ray.dir[0] = ray.dir[1] = ray.dir[2] = 0;
+    assert_int_equal(sc_accel_closest(b, &ray, &h, NULL), SC_ERR_INVALID_ARGUMENT);
+    /* an instanced scene changed: the top must be committed again */
+    assert_int_equal(sc_accel_attach_mesh(a, &v, SC_ACCEL_SHARED, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(b), SC_ERR_INVALID_ARGUMENT);
+    assert_int_equal(sc_accel_commit(a), SC_OK);
+    assert_int_equal(sc_accel_commit(b), SC_OK);
+    /* an empty scene: every ray misses */
+    ray.dir[2] = -1;
+    assert_int_equal(sc_accel_closest(b, &ray, &h, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(c), SC_OK);
+    assert_int_equal(sc_accel_closest(c, &ray, &h, NULL), SC_OK);
+    assert_int_equal(h.prim, SC_HITREC_MISS);
+    assert_int_equal(h.inst, SC_INVALID_ID);
+    sc_accel_release(a);
+    sc_accel_release(c);
+    sc_accel_release(b);
+    sc_accel_release(NULL);
+    mesh_free(&tor);
+}
+
+int main(void)
+{
+    (void)each_shared_scene;
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_instances),
+        cmocka_unit_test(test_no_holes),
+        cmocka_unit_test(test_refit),
+        cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
