@@ -256,20 +256,49 @@ sc_status sc_accel_update_vertices(sc_accel *a, uint32_t geom, const float *posi
 
 /* ---- commit ------------------------------------------------------------- */
 
-/* The world box of an object box under an instance: the 8 corners mapped
- * in double, rounded outward, padded by 2^-20 of the box's extent. */
-static void world_box(const accel_inst *in, const float lo[3], const float hi[3], box3 *out)
+/* The box (lo, hi) mapped by an instance, in double, grown into [l, h]:
+ * the image of centre c and half-extent e is M c + T +- |M| e. */
+static void grow_mapped(const accel_inst *in, const float lo[3], const float hi[3], double l[3], double h[3])
+{
+    const double c[3] = { 0.5 * ((double)lo[0] + hi[0]), 0.5 * ((double)lo[1] + hi[1]), 0.5 * ((double)lo[2] + hi[2]) };
+    const double e[3] = { 0.5 * ((double)hi[0] - lo[0]), 0.5 * ((double)hi[1] - lo[1]), 0.5 * ((double)hi[2] - lo[2]) };
+    for (int i = 0; i < 3; i++) {
+        const float *r = in->xfm + 4 * i;
+        const double w = (double)r[0] * c[0] + (double)r[1] * c[1] + (double)r[2] * c[2] + r[3];
+        const double x = fabs((double)r[0]) * e[0] + fabs((double)r[1]) * e[1] + fabs((double)r[2]) * e[2];
+        l[i] = fmin(l[i], w - x);
+        h[i] = fmax(h[i], w + x);
+    }
+}
+
+/* The boxes of the object's tree down to `levels` below node, mapped. */
+static void grow_node(const accel_inst *in, const sc_bvh *b, const sc_bvh_node8 *node, int levels, double l[3],
+                      double h[3])
+{
+    for (int i = 0; i < SC_BVH_N; i++) {
+        const uint64_t c = node->child[i];
+        if (!c)
+            continue;
+        if (levels > 0 && !sc_ref_is_leaf(c)) {
+            grow_node(in, b, (const sc_bvh_node8 *)(const void *)((const unsigned char *)b->nodes + sc_ref_offset(c)),
+                      levels - 1, l, h);
+            continue;
+        }
+        const float lo[3] = { node->b[0][i], node->b[2][i], node->b[4][i] },
+                    hi[3] = { node->b[1][i], node->b[3][i], node->b[5][i] };
+        grow_mapped(in, lo, hi, l, h);
+    }
+}
+
+/* The world box of an instance: the boxes of the object tree's top two
+ * levels (up to 64) mapped in double, rather than its root box alone: a
+ * rotated object's box of its box can be far larger than the object, and
+ * every ray through the difference pays an instance visit for nothing.
+ * Rounded outward, padded by 2^-20 of its extent. */
+static void world_box(const accel_inst *in, const sc_bvh *b, box3 *out)
 {
     double l[3] = { INFINITY, INFINITY, INFINITY }, h[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (int c = 0; c < 8; c++) {
-        const double p[3] = { c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2] };
-        for (int i = 0; i < 3; i++) {
-            const float *r = in->xfm + 4 * i;
-            double w = (double)r[0] * p[0] + (double)r[1] * p[1] + (double)r[2] * p[2] + r[3];
-            l[i] = fmin(l[i], w);
-            h[i] = fmax(h[i], w);
-        }
-    }
+    grow_node(in, b, &b->nodes[0], 1, l, h);
     for (int i = 0; i < 3; i++) {
         double pad = (h[i] - l[i]) * 0x1p-20 + (fabs(l[i]) + fabs(h[i])) * 0x1p-40;
         out->lo[i] = nextafterf((float)(l[i] - pad), -INFINITY);
@@ -353,7 +382,7 @@ static sc_status build_top(sc_accel *a)
             continue;
         if (i < a->ninst) {
             accel_inst *in = &a->inst[i];
-            world_box(in, b->root_lo, b->root_hi, &boxes[n]);
+            world_box(in, b, &boxes[n]);
             double r = 0;
             for (int k = 0; k < 3; k++) {
                 double e = fmax(fabs((double)boxes[n].lo[k] - in->xfm[4 * k + 3]),
