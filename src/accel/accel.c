@@ -17,8 +17,8 @@
 #include "bvh/bvh_internal.h"
 #include "common/sc_clock.h"
 #include "spherecull/sc_accel.h"
-#include "trace/ray_setup.h"
-#include "trace/traverse_stack.h"
+#include "isa/isa_dispatch.h"
+#include "trace/trace_top.h"
 
 typedef struct accel_inst {
     sc_accel *obj;
@@ -42,11 +42,9 @@ struct sc_accel {
     size_t bvh_meshes;           /* meshes in the BVH */
     /* The top level (instances only): items 0..ninst-1 are the instances,
      * item ninst the scene's own BVH. */
-    sc_bvh_node8 *top;
-    size_t top_nodes;
-    uint64_t top_root;           /* 0: no item has a box */
-    float top_lo[3], top_hi[3];
-    double top_kappa, top_radius;
+    size_t top_nodes;            /* 0: no top tree (no instance has a box) */
+    sc_top_item *items;          /* ninst + 1 */
+    sc_top top;                  /* what the top-level kernels read (trace_top.h) */
     int committed;
     double build_seconds;
     unsigned builds, refits;
@@ -88,7 +86,8 @@ void sc_accel_release(sc_accel *a)
     free(a->views);
     free(a->copies);
     free(a->inst);
-    free(a->top);
+    free((void *)a->top.nodes);
+    free(a->items);
     sc_bvh_free(a->bvh);
     free(a);
 }
@@ -356,12 +355,11 @@ static uint64_t top_collapse(top_builder *T, const uint32_t *kids_in, int nk)
 
 static sc_status build_top(sc_accel *a)
 {
-    free(a->top);
-    a->top = NULL;
+    free((void *)a->top.nodes);
+    free(a->items);
+    a->items = NULL;
     a->top_nodes = 0;
-    a->top_root = 0;
-    a->top_kappa = 1;
-    a->top_radius = 0;
+    memset(&a->top, 0, sizeof a->top);
     if (!a->ninst)
         return SC_OK;
     const size_t nitems = a->ninst + 1;
@@ -369,15 +367,29 @@ static sc_status build_top(sc_accel *a)
     float (*cen)[3] = malloc(nitems * sizeof *cen);
     uint32_t *ids = malloc(nitems * sizeof *ids);
     sc_bnode *bn = malloc((2 * nitems + 1) * sizeof *bn);
-    a->top = aligned_alloc(64, (nitems + 1) * sizeof(sc_bvh_node8));
+    sc_bvh_node8 *nodes = aligned_alloc(64, (nitems + 1) * sizeof(sc_bvh_node8));
+    a->items = malloc(nitems * sizeof *a->items);
     sc_status st = SC_ERR_OUT_OF_MEMORY;
-    if (!boxes || !cen || !ids || !bn || !a->top)
+    if (!boxes || !cen || !ids || !bn || !nodes || !a->items) {
+        free(nodes);
         goto out;
+    }
+    a->top.nodes = nodes;
+    a->top.items = a->items;
+    a->top.kappa = 1;
+    a->top.radius = 0;
     size_t n = 0;
     box3 all;
     box_empty(&all);
     for (size_t i = 0; i < nitems; i++) {
-        const sc_bvh *b = i < a->ninst ? a->inst[i].obj->bvh : a->bvh;
+        /* The item reads its BVH through the scene that owns it, at trace
+         * time: a scene committed again behind an instance is at worst
+         * culled by stale boxes, never freed memory. */
+        const sc_bvh *const *slot = (const sc_bvh *const *)(i < a->ninst ? &a->inst[i].obj->bvh : &a->bvh);
+        a->items[i] = (sc_top_item){ slot, i < a->ninst ? a->inst[i].inv : NULL,
+                                     i < a->ninst ? a->inst[i].cof : NULL,
+                                     i < a->ninst ? (uint32_t)i : SC_INVALID_ID };
+        const sc_bvh *b = *slot;
         if (!b || !b->has_root)
             continue;
         if (i < a->ninst) {
@@ -389,8 +401,8 @@ static sc_status build_top(sc_accel *a)
                                 fabs((double)boxes[n].hi[k] - in->xfm[4 * k + 3]));
                 r += e * e;
             }
-            a->top_kappa = fmax(a->top_kappa, in->kappa);
-            a->top_radius = fmax(a->top_radius, sqrt(r));
+            a->top.kappa = fmax(a->top.kappa, in->kappa);
+            a->top.radius = fmax(a->top.radius, sqrt(r));
         } else {
             for (int k = 0; k < 3; k++)
                 boxes[n].lo[k] = b->root_lo[k], boxes[n].hi[k] = b->root_hi[k];
@@ -404,17 +416,16 @@ static sc_status build_top(sc_accel *a)
     if (!n)
         goto out;
     for (int k = 0; k < 3; k++)
-        a->top_lo[k] = all.lo[k], a->top_hi[k] = all.hi[k];
+        a->top.lo[k] = all.lo[k], a->top.hi[k] = all.hi[k];
     const sc_sah_params sah = { 1, 16, 1.0f, 1 };
     size_t count;
     uint32_t root = sc_build_binned_sah(boxes, (const float (*)[3])cen, ids, n, &sah, bn, &count);
-    top_builder T = { bn, ids, a->top, 0 };
+    top_builder T = { bn, ids, nodes, 0 };
     if (bn[root].leaf)
         top_collapse(&T, &root, 1);
     else
         top_collapse(&T, (uint32_t[2]){ bn[root].a, bn[root].b }, 2);
     a->top_nodes = T.used;
-    a->top_root = 1;
 out:
     free(boxes);
     free(cen);
@@ -491,234 +502,12 @@ sc_status sc_accel_refit(sc_accel *a)
 
 /* ---- trace -------------------------------------------------------------- */
 
-static void inst_ray(const accel_inst *in, const sc_ray *r, sc_ray *o)
-{
-    const double *m = in->inv;
-    for (int i = 0; i < 3; i++) {
-        const double *row = m + 4 * i;
-        o->org[i] = (float)(row[0] * r->org[0] + row[1] * r->org[1] + row[2] * r->org[2] + row[3]);
-        o->dir[i] = (float)(row[0] * r->dir[0] + row[1] * r->dir[1] + row[2] * r->dir[2]);
-    }
-    o->tmin = r->tmin;
-    o->tmax = r->tmax;
-}
-
 sc_status sc_accel_instance_ray(const sc_accel *a, uint32_t id, const sc_ray *ray, sc_ray *out)
 {
     if (!a || !ray || !out || id >= a->ninst || !sc_ray_valid(ray))
         return SC_ERR_INVALID_ARGUMENT;
-    inst_ray(&a->inst[id], ray, out);
+    sc_top_object_ray(a->inst[id].inv, ray, out);
     return SC_OK;
-}
-
-/* A hit of mesh-set BVH b, its prim a global id, as (geom, prim). */
-static void map_ids(const sc_bvh *b, sc_hitrec *h)
-{
-    if (h->prim == SC_HITREC_MISS || b->mesh_count < 2)
-        return;
-    size_t g = sc_mesh_of(b->first, b->mesh_count, h->prim);
-    h->geom = (uint32_t)g;
-    h->prim -= b->first[g];
-}
-
-static void add_stats(sc_trace_stats *to, const sc_trace_stats *s)
-{
-    to->nodes += s->nodes;
-    to->leaves += s->leaves;
-    to->sphere_tests += s->sphere_tests;
-    to->sphere_rejects += s->sphere_rejects;
-    to->tri_tests += s->tri_tests;
-    to->tri_hits += s->tri_hits;
-}
-
-/* Of two hits at equal t the smaller (inst, geom, prim) wins; a miss has
- * t = tmax and prim = MISS, so any hit at tmax beats it. */
-static int better(const sc_hitrec *h, const sc_hitrec *best)
-{
-    if (h->prim == SC_HITREC_MISS)
-        return 0;
-    if (best->prim == SC_HITREC_MISS || h->t < best->t)
-        return 1;
-    if (h->t > best->t)
-        return 0;
-    if (h->inst != best->inst)
-        return h->inst < best->inst;
-    if (h->geom != best->geom)
-        return h->geom < best->geom;
-    return h->prim < best->prim;
-}
-
-/* The top level's per-ray set-up. E bounds how far (in world space) a
- * point of a rounded object-space ray lies from the world ray at the same
- * t: u kappa (|o - T| + t |d|) <= u kappa (2 sqrt(3) m + R) for hits in the
- * top box, with m the largest distance of the ray's origin from its planes
- * and R the largest world-box radius around an instance's translation; E
- * is twice that, so every node box grown by E keeps an instance whose
- * rounded ray hits its geometry. In distance along axis k that is
- * Ek = E |1/d_k|. */
-typedef struct top_ray {
-    float org[3], rd[3], Ek[3];   /* rd = fl(1/d), +-inf for d = +-0 */
-    int near_row[3], far_row[3];
-} top_ray;
-
-static void top_setup(const sc_accel *a, const sc_ray *r, top_ray *t)
-{
-    double m = 0;
-    for (int k = 0; k < 3; k++)
-        m = fmax(m, fmax(fabs((double)a->top_lo[k] - r->org[k]), fabs((double)a->top_hi[k] - r->org[k])));
-    const double E = 0x1p-23 * a->top_kappa * (3.4642 * m + a->top_radius) * 1.01 + 0x1p-120;
-    for (int k = 0; k < 3; k++) {
-        t->org[k] = r->org[k];
-        t->rd[k] = 1.0f / r->dir[k];
-        t->Ek[k] = (float)(E * fabs((double)t->rd[k]) * (1 + 0x1p-20));
-        const int neg = signbit(r->dir[k]) != 0;
-        t->near_row[k] = 2 * k + neg;
-        t->far_row[k] = 2 * k + 1 - neg;
-    }
-}
-
-/* The 8 children of a top node, their boxes grown by E, in the arithmetic
- * of sc_slab_par (node_bvh8_slab.h: no FMA, so the baseline ISA's vector
- * unit runs it): (plane - o) * fl(1/d) - Ek carries at most 4u of
- * |plane - o| |1/d| <= (m + E) |1/d|, under a fifth of Ek since E >= 20u m
- * (kappa >= 3 for Frobenius norms); the last rounding is covered by the
- * relative 2^-21 and the absolute 2^-122 of the end. A ray in a slab's
- * plane gives 0 * inf = NaN, which the running max/min ignore (a > b ? a :
- * b returns b for a NaN), and a ray parallel to an axis gets Ek = inf: that
- * axis never culls, which is conservative. dist[i]: a lower bound of child
- * i's entry distance. */
-static unsigned top_slab(const top_ray *t, const sc_bvh_node8 *node, float tmin, float tmax, float *dist)
-{
-#if defined(__SSE2__)
-    /* The same operations four children at a time (SSE2: the x86-64
-     * baseline); maxps/minps return their second operand for a NaN. */
-    __m128 a0 = _mm_set1_ps(tmin), a1 = a0, b0 = _mm_set1_ps(tmax), b1 = b0;
-    for (int k = 0; k < 3; k++) {
-        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
-        const __m128 o = _mm_set1_ps(t->org[k]), rd = _mm_set1_ps(t->rd[k]), e = _mm_set1_ps(t->Ek[k]);
-        a0 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr), o), rd), e), a0);
-        a1 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr + 4), o), rd), e), a1);
-        b0 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr), o), rd), e), b0);
-        b1 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr + 4), o), rd), e), b1);
-    }
-    const __m128 down = _mm_set1_ps(1.0f - 0x1p-21f), up = _mm_set1_ps(1.0f + 0x1p-21f), eps = _mm_set1_ps(0x1p-122f);
-    a0 = _mm_sub_ps(_mm_mul_ps(a0, down), eps);
-    a1 = _mm_sub_ps(_mm_mul_ps(a1, down), eps);
-    b0 = _mm_add_ps(_mm_mul_ps(b0, up), eps);
-    b1 = _mm_add_ps(_mm_mul_ps(b1, up), eps);
-    _mm_storeu_ps(dist, a0);
-    _mm_storeu_ps(dist + 4, a1);
-    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(a0, b0)) | (unsigned)_mm_movemask_ps(_mm_cmple_ps(a1, b1)) << 4;
-#else
-    float a[SC_BVH_N], b[SC_BVH_N];
-    for (int i = 0; i < SC_BVH_N; i++)
-        a[i] = tmin, b[i] = tmax;
-    for (int k = 0; k < 3; k++) {
-        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
-        const float o = t->org[k], rd = t->rd[k], e = t->Ek[k];
-        for (int i = 0; i < SC_BVH_N; i++) {
-            const float tn = (nr[i] - o) * rd - e, tf = (fr[i] - o) * rd + e;
-            a[i] = tn > a[i] ? tn : a[i];
-            b[i] = tf < b[i] ? tf : b[i];
-        }
-    }
-    unsigned mask = 0;
-    for (int i = 0; i < SC_BVH_N; i++) {
-        const float lo = a[i] * (1.0f - 0x1p-21f) - 0x1p-122f, hi = b[i] * (1.0f + 0x1p-21f) + 0x1p-122f;
-        dist[i] = lo;
-        mask |= (unsigned)(lo <= hi) << i;
-    }
-    return mask;
-#endif
-}
-
-/* One item of the top level against the ray: its hit into *best when
- * better (closest), or 1 if it occludes (any). */
-static int visit_item(const sc_accel *a, uint32_t item, const sc_ray *ray, sc_hitrec *best, int any,
-                      sc_trace_stats *st)
-{
-    sc_ray r = *ray;
-    const sc_bvh *b = a->bvh;
-    const accel_inst *in = NULL;
-    if (item < a->ninst) {
-        in = &a->inst[item];
-        b = in->obj->bvh;
-        inst_ray(in, ray, &r);
-        if (!sc_ray_valid(&r))
-            return 0;
-    }
-    if (!b)
-        return 0;
-    sc_trace_stats s = { 0 };
-    sc_trace_stats *sp = st ? &s : NULL;
-    int hit = 0;
-    if (any) {
-        sc_trace_any(b, &r, &hit, sp);
-    } else {
-        sc_hitrec h;
-        r.tmax = best->t;
-        sc_trace_closest(b, &r, &h, sp);
-        map_ids(b, &h);
-        if (in)
-            h.inst = item;
-        if (better(&h, best)) {
-            if (in) {
-                const float n[3] = { h.ng[0], h.ng[1], h.ng[2] };
-                for (int i = 0; i < 3; i++)
-                    h.ng[i] = in->cof[3 * i] * n[0] + in->cof[3 * i + 1] * n[1] + in->cof[3 * i + 2] * n[2];
-            }
-            *best = h;
-        }
-    }
-    if (st)
-        add_stats(st, &s);
-    return hit;
-}
-
-static int top_trace(const sc_accel *a, const sc_ray *ray, sc_hitrec *best, int any, sc_trace_stats *st)
-{
-    if (!a->top_root)
-        return 0;
-    top_ray t;
-    top_setup(a, ray, &t);
-    sc_stack_entry stack[SC_TRACE_STACK];
-    int sp = 0;
-    stack[sp].ref = 0;
-    stack[sp].dist = ray->tmin;
-    sp++;
-    while (sp) {
-        const sc_stack_entry e = stack[--sp];
-        const float tmax = any ? ray->tmax : best->t;
-        if (e.dist > tmax)
-            continue;
-        if (sc_ref_is_leaf(e.ref)) {
-            if (visit_item(a, (uint32_t)(e.ref & 0xffffffffu), ray, best, any, st))
-                return 1;
-            continue;
-        }
-        const sc_bvh_node8 *node = &a->top[e.ref];
-        if (st)
-            st->nodes++;
-        float dist[SC_BVH_N];
-        unsigned mask = top_slab(&t, node, ray->tmin, tmax, dist);
-        if (!mask)
-            continue;
-        if ((mask & (mask - 1)) == 0) {
-            int i = __builtin_ctz(mask);
-            stack[sp].ref = node->child[i];
-            stack[sp].dist = dist[i];
-            sp++;
-            continue;
-        }
-        uint64_t nearest = sc_order_children(node, mask, dist, stack, &sp);
-        int i = 0;
-        while (node->child[i] != nearest)
-            i++;
-        stack[sp].ref = nearest;
-        stack[sp].dist = dist[i];
-        sp++;
-    }
-    return 0;
 }
 
 static void miss(const sc_ray *ray, sc_hitrec *h)
@@ -741,11 +530,12 @@ sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit,
             return SC_OK;
         }
         sc_status s = sc_trace_closest(a->bvh, ray, hit, st);
-        map_ids(a->bvh, hit);
+        sc_top_map_ids(a->bvh, hit);
         return s;
     }
     miss(ray, hit);
-    top_trace(a, ray, hit, 0, st);
+    if (a->top_nodes)
+        sc_kernels_active()->trace[0].top_closest(&a->top, ray, hit, st);
     if (st)
         st->rays++;
     return SC_OK;
@@ -764,7 +554,7 @@ sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_t
         }
         return sc_trace_any(a->bvh, ray, occluded, st);
     }
-    *occluded = top_trace(a, ray, NULL, 1, st);
+    *occluded = a->top_nodes ? sc_kernels_active()->trace[0].top_any(&a->top, ray, st) : 0;
     if (st)
         st->rays++;
     return SC_OK;
@@ -780,7 +570,7 @@ sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_s
         sc_status s = sc_trace_closest_n(a->bvh, rays, ray_stride, hits, hit_stride, n, flags, st);
         if (a->bvh->mesh_count > 1)
             for (size_t i = 0; i < n; i++)
-                map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
+                sc_top_map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
         return s;
     }
     sc_status s = SC_OK;
@@ -828,7 +618,8 @@ sc_status sc_accel_get_info(const sc_accel *a, sc_accel_info *info)
         for (size_t g = 0; g < a->inst[i].obj->nmesh; g++)
             info->instanced_triangles += a->inst[i].obj->views[g].triangle_count;
     info->bytes += sizeof *a + a->cap_mesh * (sizeof *a->views + sizeof *a->copies) +
-                   a->cap_inst * sizeof *a->inst + a->top_nodes * sizeof(sc_bvh_node8);
+                   a->cap_inst * sizeof *a->inst + a->top_nodes * sizeof(sc_bvh_node8) +
+                   (a->ninst ? (a->ninst + 1) * sizeof(sc_top_item) : 0);
     if (a->bvh) {
         sc_bvh_info bi;
         sc_bvh_get_info(a->bvh, &bi);

@@ -23,6 +23,8 @@ static inline void sc_hit_ids_normal(sc_hitrec *h, const float *rows, unsigned W
     h->inst = SC_INVALID_ID;
 }
 
+struct sc_top;
+
 typedef struct sc_trace_kernels {
     void (*closest)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
     int (*any)(const sc_bvh *bvh, const sc_ray *ray);
@@ -43,6 +45,10 @@ typedef struct sc_trace_kernels {
                         sc_trace_stats *st);
     void (*any_p16)(const sc_bvh *bvh, const sc_ray_packet16 *rays, uint32_t lanes, int32_t *occluded,
                     sc_trace_stats *st);
+    /* The top level of a two-level scene (trace_top.h), the same in every
+     * row: hit holds a miss on entry. */
+    void (*top_closest)(const struct sc_top *top, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
+    int (*top_any)(const struct sc_top *top, const sc_ray *ray, sc_trace_stats *st);
 } sc_trace_kernels;
 
 /* [sc_tri_test]. The x86 tables exist only in x86 builds. */

@@ -76,6 +76,7 @@ static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned
     return hm;
 }
 
+#define SC_TOP_TABLE sc_trace_kernels_scalar
 #include "traverse_bvh8_single.h"
 
 const sc_trace_kernels sc_trace_kernels_scalar[SC_TRI_TEST_COUNT] = SC_TRACE_KERNEL_TABLE;

@@ -1,0 +1,215 @@
+/* The top level of a two-level scene (src/accel, sc_accel.h): what the
+ * top-level traversal kernels (traverse_top_bvh8.h, one per ISA) read, and
+ * the scalar pieces they share. The scene handle builds it; nothing here
+ * knows the handle.
+ *
+ * Items are the leaves of the top tree: an instance (a BVH reached through
+ * a transform) or the scene's own meshes (a BVH without one). A child
+ * reference of a top node is SC_REF_LEAF | item index, or an inner node's
+ * index.
+ *
+ * Conservative culling. A world ray reaches an instance as the object
+ * space ray rounded once to float, whose points lie within
+ * u kappa (|o - T| + t |d|) <= u kappa (2 sqrt(3) m + R) of the world
+ * ray's at the same t (kappa >= ||M|| ||M^-1||, m the largest distance of
+ * the ray's origin from the top box's planes, R the largest world-box
+ * radius around an instance's translation, hits within the top box). E is
+ * twice that; node tests widen every box by E, so an instance whose rounded
+ * ray hits its geometry is never culled. */
+#ifndef SPHERECULL_TRACE_TRACE_TOP_H
+#define SPHERECULL_TRACE_TRACE_TOP_H
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "bvh/bvh_internal.h"
+#include "ray_setup.h"
+#include "spherecull/sc_hit.h"
+
+typedef struct sc_top_item {
+    const sc_bvh *const *bvh;    /* where the item's BVH is kept (read at trace time); *bvh may be NULL */
+    const double *inv;           /* 12: world to object, row-major 3x4; NULL: no transform */
+    const float *cof;            /* 9: cof(M), row-major: object normals to world */
+    uint32_t inst;               /* hit.inst of its hits (SC_INVALID_ID without a transform) */
+} sc_top_item;
+
+typedef struct sc_top {
+    const sc_bvh_node8 *nodes;   /* nodes[0] is the root */
+    const sc_top_item *items;
+    float lo[3], hi[3];          /* the top tree's box */
+    double kappa, radius;
+} sc_top;
+
+/* E of the comment above for ray r; m is returned for the set-up. */
+static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out)
+{
+    double m = 0;
+    for (int k = 0; k < 3; k++) {
+        const double dl = fabs((double)T->lo[k] - r->org[k]), dh = fabs((double)T->hi[k] - r->org[k]);
+        m = dl > m ? dl : m;
+        m = dh > m ? dh : m;
+    }
+    *m_out = m;
+    return 0x1p-23 * T->kappa * (3.4642 * m + T->radius) * 1.01 + 0x1p-120;
+}
+
+/* The object-space ray of an item: M^-1 (o - T), M^-1 d in double, rounded once. */
+static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
+{
+    for (int i = 0; i < 3; i++) {
+        const double *row = inv + 4 * i;
+        o->org[i] = (float)(row[0] * r->org[0] + row[1] * r->org[1] + row[2] * r->org[2] + row[3]);
+        o->dir[i] = (float)(row[0] * r->dir[0] + row[1] * r->dir[1] + row[2] * r->dir[2]);
+    }
+    o->tmin = r->tmin;
+    o->tmax = r->tmax;
+}
+
+/* A hit of a BVH over several meshes (prim a global id) as (geom, prim). */
+static inline void sc_top_map_ids(const sc_bvh *b, sc_hitrec *h)
+{
+    if (h->prim == SC_HITREC_MISS || b->mesh_count < 2)
+        return;
+    size_t g = sc_mesh_of(b->first, b->mesh_count, h->prim);
+    h->geom = (uint32_t)g;
+    h->prim -= b->first[g];
+}
+
+/* Of two hits at equal t the smaller (inst, geom, prim) wins; a miss has
+ * t = tmax and prim = MISS, so any hit at tmax beats it. */
+static inline int sc_top_better(const sc_hitrec *h, const sc_hitrec *best)
+{
+    if (h->prim == SC_HITREC_MISS)
+        return 0;
+    if (best->prim == SC_HITREC_MISS || h->t < best->t)
+        return 1;
+    if (h->t > best->t)
+        return 0;
+    if (h->inst != best->inst)
+        return h->inst < best->inst;
+    if (h->geom != best->geom)
+        return h->geom < best->geom;
+    return h->prim < best->prim;
+}
+
+static inline void sc_top_normal(const float *cof, float ng[3])
+{
+    const float n[3] = { ng[0], ng[1], ng[2] };
+    for (int i = 0; i < 3; i++)
+        ng[i] = cof[3 * i] * n[0] + cof[3 * i + 1] * n[1] + cof[3 * i + 2] * n[2];
+}
+
+/* The top node test with every box grown by E, in the arithmetic of
+ * sc_slab_par (node_bvh8_slab.h; no FMA, so it runs on every level, and
+ * parallel rays take it on every level): (plane - o) * fl(1/d) - Ek, with
+ * Ek = E |1/d_k|, carries at most 4u of |plane - o| |1/d| <= (m + E) |1/d|,
+ * under a fifth of Ek since E >= 20u m (kappa >= 3 for Frobenius norms);
+ * the last rounding is covered by the relative 2^-21 and the absolute
+ * 2^-122 at the end. A ray in a slab's plane gives 0 * inf = NaN, which
+ * the running max/min ignore (a > b ? a : b returns b for a NaN), and a
+ * ray parallel to an axis gets Ek = inf: that axis never culls, which is
+ * conservative. dist[i]: a lower bound of child i's entry distance. */
+typedef struct sc_top_ray {
+    float org[3], rd[3], Ek[3];   /* rd = fl(1/d), +-inf for d = +-0 */
+    int near_row[3], far_row[3];
+} sc_top_ray;
+
+static inline void sc_top_ray_setup(const sc_ray *r, double E, sc_top_ray *t)
+{
+    for (int k = 0; k < 3; k++) {
+        t->org[k] = r->org[k];
+        t->rd[k] = 1.0f / r->dir[k];
+        t->Ek[k] = (float)(E * fabs((double)t->rd[k]) * (1 + 0x1p-20));
+        const int neg = signbit(r->dir[k]) != 0;
+        t->near_row[k] = 2 * k + neg;
+        t->far_row[k] = 2 * k + 1 - neg;
+    }
+}
+
+static inline unsigned sc_top_slab(const sc_top_ray *t, const sc_bvh_node8 *node, float tmin, float tmax,
+                                   float *dist)
+{
+#if defined(__SSE2__)
+    /* four children at a time (SSE2, the x86-64 baseline); maxps/minps
+     * return their second operand for a NaN */
+    __m128 a0 = _mm_set1_ps(tmin), a1 = a0, b0 = _mm_set1_ps(tmax), b1 = b0;
+    for (int k = 0; k < 3; k++) {
+        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
+        const __m128 o = _mm_set1_ps(t->org[k]), rd = _mm_set1_ps(t->rd[k]), e = _mm_set1_ps(t->Ek[k]);
+        a0 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr), o), rd), e), a0);
+        a1 = _mm_max_ps(_mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(nr + 4), o), rd), e), a1);
+        b0 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr), o), rd), e), b0);
+        b1 = _mm_min_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fr + 4), o), rd), e), b1);
+    }
+    const __m128 down = _mm_set1_ps(1.0f - 0x1p-21f), up = _mm_set1_ps(1.0f + 0x1p-21f), eps = _mm_set1_ps(0x1p-122f);
+    a0 = _mm_sub_ps(_mm_mul_ps(a0, down), eps);
+    a1 = _mm_sub_ps(_mm_mul_ps(a1, down), eps);
+    b0 = _mm_add_ps(_mm_mul_ps(b0, up), eps);
+    b1 = _mm_add_ps(_mm_mul_ps(b1, up), eps);
+    _mm_storeu_ps(dist, a0);
+    _mm_storeu_ps(dist + 4, a1);
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(a0, b0)) | (unsigned)_mm_movemask_ps(_mm_cmple_ps(a1, b1)) << 4;
+#else
+    float a[SC_BVH_N], b[SC_BVH_N];
+    for (int i = 0; i < SC_BVH_N; i++)
+        a[i] = tmin, b[i] = tmax;
+    for (int k = 0; k < 3; k++) {
+        const float *nr = node->b[t->near_row[k]], *fr = node->b[t->far_row[k]];
+        const float o = t->org[k], rd = t->rd[k], e = t->Ek[k];
+        for (int i = 0; i < SC_BVH_N; i++) {
+            const float tn = (nr[i] - o) * rd - e, tf = (fr[i] - o) * rd + e;
+            a[i] = tn > a[i] ? tn : a[i];
+            b[i] = tf < b[i] ? tf : b[i];
+        }
+    }
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        const float lo = a[i] * (1.0f - 0x1p-21f) - 0x1p-122f, hi = b[i] * (1.0f + 0x1p-21f) + 0x1p-122f;
+        dist[i] = lo;
+        mask |= (unsigned)(lo <= hi) << i;
+    }
+    return mask;
+#endif
+}
+
+/* The set-up of the FMA node test (node_bvh8_slab.h) for a ray in the top
+ * tree: sc_ray_precompute's slab constants alone (the triangle tests'
+ * shear is not needed here), with the distance bound of each axis raised
+ * by E / 2u: the padding is about 2u m in space, so the growth E is folded
+ * into it (10 % over, for the float roundings here). */
+static inline void sc_top_pre(const sc_top *T, const sc_ray *r, double E, sc_ray_pre *p)
+{
+    const double X = E * 0x1p23 * 1.1;
+    for (int k = 0; k < 3; k++) {
+        const double dl = fabs((double)T->lo[k] - r->org[k]), dh = fabs((double)T->hi[k] - r->org[k]);
+        /* rounded up: at least the distance plus X */
+        const float m = (float)((dl > dh ? dl : dh) + X) * (1.0f + 0x1p-22f);
+        p->org[k] = r->org[k];
+        p->dir[k] = r->dir[k];
+        float d = r->dir[k];
+        if (fabsf(d) < SC_MIN_RCP_INPUT)
+            d = copysignf(SC_MIN_RCP_INPUT, d);
+        p->rd[k] = 1.0f / d;
+        const float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
+        const float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-124f, 0x1p-122f));
+        const float ord = p->org[k] * p->rd[k];
+        p->ord_near[k] = ord + pad;
+        p->ord_far[k] = ord - pad;
+        const int neg = signbit(p->rd[k]) != 0;
+        p->near_row[k] = 2 * k + neg;
+        p->far_row[k] = 2 * k + 1 - neg;
+        p->rdp[k] = 0;
+    }
+    p->tmin = r->tmin;
+    p->tmax = r->tmax;
+    p->parallel = sc_ray_parallel(r);
+    p->kx = 0, p->ky = 1, p->kz = 2;
+    p->Sx = p->Sy = p->Sz = 0;
+    p->xK = p->xc0 = 0;
+}
+
+#endif
