@@ -2,7 +2,8 @@
 # 'spherecull render' as a path tracer from the command line: the same PNG
 # bytes for 1 and 2 threads and for two runs, the camera options equal to
 # the scene file's camera, --tracer embree, usage errors as one line, and
-# Ctrl-C leaving an existing output as it was.
+# Ctrl-C leaving an existing output as it was; a scene of instances
+# rendered through them.
 #
 #   tests/cli_render.sh path/to/spherecull path/to/scenes/cornell.json
 set -u
@@ -74,6 +75,14 @@ for bad in "--spp 0" "--tracers nope" "--threads 0" "--repeats 0"; do
   [ "$rc" -eq 2 ] || no "bench-render $bad: exit status $rc, wanted 2"
   [ "$(wc -l < err.txt)" -eq 1 ] || no "bench-render $bad: $(wc -l < err.txt) lines on stderr"
 done
+
+# A scene of instances renders through them, the same bytes on 1 and 2
+# threads, and says so.
+O="$(dirname "$C")/orchard.json"
+"$S" render "$O" --width 96 --threads 1 -o o1.png > o1.txt || no "render orchard.json: exit status $?"
+"$S" render -q "$O" --width 96 --threads 2 -o o2.png || no "render orchard.json --threads 2: exit status $?"
+cmp -s o1.png o2.png || no "orchard.json: 1 and 2 threads give different PNG bytes"
+grep -q "800 instances of 2 objects" o1.txt || no "orchard.json did not render through its instances: $(cat o1.txt)"
 
 # Ctrl-C: exit status 130, the earlier file untouched, no temporary left.
 echo "earlier" > keep.png

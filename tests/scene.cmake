@@ -15,3 +15,8 @@ if(TARGET spherecull_render AND TARGET spherecull_scene)
   # The path tracer; with Embree built also its agreement with our tracer.
   sc_add_test(test_path SOURCES test_path.c LIBS spherecull_render spherecull_scene spherecull_compare FTZ)
 endif()
+if(TARGET spherecull_render AND TARGET spherecull_scene)
+  # Scene files with instances: the loader's two forms, bad fields, and the
+  # render through the instances against the flattened mesh's.
+  sc_add_test(test_scene_instances SOURCES test_scene_instances.c LIBS spherecull_render spherecull_scene)
+endif()

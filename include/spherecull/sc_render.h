@@ -45,6 +45,7 @@
 #include "sc_api.h"
 #include <stdint.h>
 
+#include "sc_accel.h"
 #include "sc_bvh.h"
 #include "sc_image.h"
 #include "sc_scene.h"
@@ -163,6 +164,26 @@ SC_API sc_status sc_render_debug_from_name(const char *name, sc_render_debug *ou
 /* "direct", "path". */
 SC_API const char *sc_render_integrator_name(sc_render_integrator integrator);
 SC_API sc_status sc_render_integrator_from_name(const char *name, sc_render_integrator *out);
+
+/* A scene view traced through sc_accel.h: one tree per instanced object and
+ * a top level over the instances (scenes/README.md, "instances"), beside
+ * one tree over the rest, so instances are built once, not once per copy.
+ * Hits come back as indices into view->mesh (an instance's triangle t is
+ * view->mesh's first_triangle + t), so sc_render shades them as it shades
+ * the flattened mesh; the hits themselves are those of the rounded
+ * object-space rays (sc_accel.h), so a pixel on an edge may differ from a
+ * render of the flattened mesh. cfg NULL: sc_bvh_config_default. The view's
+ * arrays must outlive it. Threads: the backend may be called from any
+ * number of threads. */
+typedef struct sc_scene_accel sc_scene_accel;
+SC_API sc_status sc_scene_accel_build(const sc_scene_view *view, const sc_bvh_config *cfg, sc_scene_accel **out);
+SC_API void sc_scene_accel_free(sc_scene_accel *accel);
+/* *out calls the scene accel; it stays valid while accel lives. */
+SC_API void sc_scene_accel_backend(sc_scene_accel *accel, sc_render_backend *out);
+/* The top-level scene's info (bytes: the top level and the rest's tree),
+ * and the bytes and build seconds of everything (objects included). */
+SC_API sc_status sc_scene_accel_info(const sc_scene_accel *accel, sc_accel_info *world, size_t *total_bytes,
+                                     double *build_seconds);
 
 /* Renders view (camera, lights, colours, emission) traced through bvh (or
  * opt->backend), which must have been built from view's mesh (hit.prim

@@ -115,6 +115,19 @@ typedef struct sc_scene_options {
 } sc_scene_options;
 
 /* Read-only view of a scene; valid until the scene is freed or modified. */
+/* A rigid instance from a scene file's "instances" (scenes/README.md): an
+ * object (a mesh loaded once, in object space) placed by a transform. The
+ * scene view holds both forms: every instance's triangles in view.mesh
+ * (the transform applied in double, rounded once: what the tools that take
+ * one mesh see), and the objects and transforms, from which sc_accel.h
+ * builds one tree per object and a top level over the instances. */
+typedef struct sc_scene_instance {
+    uint32_t object;            /* index into sc_scene_view.objects */
+    float xfm[12];              /* object to world, row-major 3x4 (as sc_accel_attach_instance) */
+    size_t first_triangle;      /* its triangles in view.mesh: [first_triangle, first_triangle +
+                                   objects[object].triangle_count), in the object's order */
+} sc_scene_instance;
+
 typedef struct sc_scene_view {
     sc_mesh_view mesh;          /* every triangle of the scene, packed (strides 0) */
     const uint32_t *mesh_ids;   /* 1 per triangle, each < num_meshes */
@@ -129,6 +142,9 @@ typedef struct sc_scene_view {
      * path tracer; from a scene file's "emission" or a mesh file's emissive
      * material colour. */
     const float *mesh_emission;
+    const sc_mesh_view *objects;             /* the instanced meshes, object space, packed */
+    const sc_scene_instance *instances;      /* in file order */
+    size_t num_objects, num_instances;
 } sc_scene_view;
 
 typedef struct sc_scene_stats {

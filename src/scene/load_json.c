@@ -12,6 +12,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "common/sc_rng.h"
 #include "load_json.h"
 
 #define MAX_JSON_BYTES (16u << 20)
@@ -19,6 +20,7 @@
 #define MAX_LIGHTS 1024
 #define MAX_INLINE_VERTICES 1000000
 #define PI 3.14159265358979323846
+#define MAX_INSTANCES 1000000
 
 typedef struct jctx {
     sc_scene *s;
@@ -258,6 +260,108 @@ done:
     return st;
 }
 
+/* A mesh entry's "instances": an array of placements ({"scale", "rotate",
+ * "translate"}, as a mesh entry's own) or a grid ({"grid": [nx, ny, nz],
+ * "spacing": s or [sx, sy, sz], "rotate_jitter": degrees about y,
+ * "scale_jitter": fraction, "seed": n}). Returns the transforms (row-major
+ * 3x4, malloc'd) and their count, or minus the status, the error set. */
+static long parse_instances(jctx *c, const cJSON *v, const char *where, float (**out)[12])
+{
+    *out = NULL;
+    long fail = -(long)SC_ERR_PARSE;
+    if (cJSON_IsArray(v)) {
+        long n = cJSON_GetArraySize(v);
+        if (n < 1 || n > MAX_INSTANCES) {
+            JERR(c, SC_ERR_PARSE, "%s: %sinstances must hold 1..%d placements", c->path, where, MAX_INSTANCES);
+            return fail;
+        }
+        float (*x)[12] = malloc(sizeof *x * (size_t)n);
+        if (!x) {
+            JERR(c, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", c->path);
+            return -(long)SC_ERR_OUT_OF_MEMORY;
+        }
+        long i = 0;
+        for (const cJSON *e = v->child; e; e = e->next, i++) {
+            char w[80];
+            snprintf(w, sizeof w, "%sinstances[%ld].", where, i);
+            static const char *const known[] = { "scale", "rotate", "translate", NULL };
+            if (!cJSON_IsObject(e)) {
+                free(x);
+                JERR(c, SC_ERR_PARSE, "%s: %sinstances[%ld] must be an object", c->path, where, i);
+                return fail;
+            }
+            warn_unknown_keys(c, e, "an instance", known);
+            double xf[16];
+            int any;
+            if (mesh_transform(c, e, w, xf, &any) < 0) {
+                free(x);
+                return fail;
+            }
+            for (int k = 0; k < 12; k++)
+                x[i][k] = (float)xf[k];
+        }
+        *out = x;
+        return n;
+    }
+    if (!cJSON_IsObject(v)) {
+        JERR(c, SC_ERR_PARSE, "%s: %sinstances must be an array of placements or a {\"grid\": ...} object", c->path,
+             where);
+        return fail;
+    }
+    static const char *const known[] = { "grid", "spacing", "rotate_jitter", "scale_jitter", "seed", NULL };
+    warn_unknown_keys(c, v, "an instance grid", known);
+    char w[64];
+    snprintf(w, sizeof w, "%sinstances.", where);
+    double g[3], sp[3] = { 1, 1, 1 }, rj = 0, sj = 0, seed = 1;
+    int r = get_vec3(c, v, "grid", w, MAX_INSTANCES, g);
+    if (r <= 0) {
+        if (r == 0)
+            JERR(c, SC_ERR_PARSE, "%s: %sgrid is required: [nx, ny, nz]", c->path, w);
+        return fail;
+    }
+    for (int k = 0; k < 3; k++)
+        if (!(g[k] >= 1) || g[k] != floor(g[k])) {
+            JERR(c, SC_ERR_PARSE, "%s: %sgrid must hold 3 whole numbers >= 1", c->path, w);
+            return fail;
+        }
+    if (g[0] * g[1] * g[2] > MAX_INSTANCES) {
+        JERR(c, SC_ERR_LIMIT, "%s: %sgrid makes more than %d instances", c->path, w, MAX_INSTANCES);
+        return -(long)SC_ERR_LIMIT;
+    }
+    const cJSON *spv = cJSON_GetObjectItemCaseSensitive(v, "spacing");
+    if (spv && cJSON_IsNumber(spv)) {
+        if (get_number(c, v, "spacing", w, 0, 1e15, 1, &sp[0]) < 0)
+            return fail;
+        sp[1] = sp[2] = sp[0];
+    } else if (get_vec3(c, v, "spacing", w, 1e15, sp) < 0) {
+        return fail;
+    }
+    if (get_number(c, v, "rotate_jitter", w, 0, 360, 0, &rj) < 0 || get_number(c, v, "scale_jitter", w, 0, 0.99, 0, &sj) < 0 ||
+        get_number(c, v, "seed", w, 0, 1e15, 0, &seed) < 0)
+        return fail;
+    const long nx = (long)g[0], ny = (long)g[1], nz = (long)g[2], n = nx * ny * nz;
+    float (*x)[12] = malloc(sizeof *x * (size_t)n);
+    if (!x) {
+        JERR(c, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", c->path);
+        return -(long)SC_ERR_OUT_OF_MEMORY;
+    }
+    sc_rng rng;
+    sc_rng_seed(&rng, (uint64_t)seed);
+    for (long i = 0; i < n; i++) {
+        const long ix = i % nx, iy = (i / nx) % ny, iz = i / (nx * ny);
+        const double a = sc_rng_range(&rng, -rj, rj) * PI / 180, sc = 1 + sc_rng_range(&rng, -sj, sj);
+        const double ca = cos(a), sa = sin(a);
+        /* rotation about y, uniform scale, then the grid point (centred) */
+        const double m[12] = { sc * ca, 0, sc * sa, ((double)ix - 0.5 * (double)(nx - 1)) * sp[0],
+                               0, sc, 0, ((double)iy - 0.5 * (double)(ny - 1)) * sp[1],
+                               -sc * sa, 0, sc * ca, ((double)iz - 0.5 * (double)(nz - 1)) * sp[2] };
+        for (int k = 0; k < 12; k++)
+            x[i][k] = (float)m[k];
+    }
+    *out = x;
+    return n;
+}
+
 static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
 {
     const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
@@ -268,7 +372,7 @@ static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
     if (cJSON_GetArraySize(meshes) > MAX_MESHES_IN_JSON)
         return JERR(c, SC_ERR_LIMIT, "%s: more than %d meshes", c->path, MAX_MESHES_IN_JSON);
     static const char *const known[] = { "file", "vertices", "faces", "color", "emission", "scale",
-                                         "rotate", "translate", "name", NULL };
+                                         "rotate", "translate", "name", "instances", NULL };
     int i = 0;
     for (const cJSON *m = meshes->child; m; m = m->next, i++) {
         char where[48];
@@ -292,6 +396,44 @@ static sc_status load_meshes(jctx *c, const cJSON *root, const char *base_dir)
         int any;
         if (mesh_transform(c, m, where, xf, &any) < 0)
             return SC_ERR_PARSE;
+        const cJSON *iv = cJSON_GetObjectItemCaseSensitive(m, "instances");
+        if (iv) {
+            /* the entry (with its own transform) is the object, loaded once */
+            float (*xfm)[12];
+            long n = parse_instances(c, iv, where, &xfm);
+            if (n < 0)
+                return (sc_status)-n;
+            sc_scene *sub;
+            sc_status st = sc_scene_create_nested(c->s, &sub);
+            if (st != SC_OK) {
+                free(xfm);
+                return JERR(c, st, "%s: %s", c->path, sc_strerror(st));
+            }
+            if (inline_mesh) {
+                sc_scene *keep = c->s;
+                c->s = sub;
+                st = load_inline_mesh(c, m, where, any ? xf : NULL, has_color == 1 ? color : NULL);
+                c->s = keep;
+            } else {
+                st = c->append_mesh(sub, f->valuestring, base_dir, any ? xf : NULL, has_color == 1 ? color : NULL,
+                                    c->err, c->errlen);
+            }
+            c->s->warnings += sub->warnings;
+            if (st == SC_OK) {
+                char what[600];
+                snprintf(what, sizeof what, "%s: %sinstances", c->path, where);
+                st = sc_scene_add_instances(c->s, sub, (const float (*)[12])xfm, (size_t)n, NULL,
+                                            has_emission == 1 ? emission : NULL, what, c->err, c->errlen);
+            }
+            if (st == SC_OK && sub->num_triangles == 0)
+                sc_scene_warnf(c->s, "%s: %s'%s' added no triangles", c->path, where,
+                               inline_mesh ? "vertices" : f->valuestring);
+            sc_scene_free(sub);
+            free(xfm);
+            if (st != SC_OK)
+                return st;
+            continue;
+        }
         size_t before = c->s->num_triangles, first_mesh = c->s->num_meshes;
         sc_status st = inline_mesh ? load_inline_mesh(c, m, where, any ? xf : NULL, has_color == 1 ? color : NULL)
                                    : c->append_mesh(c->s, f->valuestring, base_dir, any ? xf : NULL,

@@ -167,6 +167,10 @@ void sc_scene_free(sc_scene *s)
     free(s->mesh_emission);
     free(s->lights);
     free(s->cache_dir);
+    for (size_t i = 0; i < s->num_objects; i++)
+        free((void *)s->objects[i].positions);
+    free(s->objects);
+    free(s->instances);
     free(s);
 }
 
@@ -502,6 +506,85 @@ sc_status sc_scene_get_view(const sc_scene *s, sc_scene_view *v)
     v->camera = s->camera;
     memcpy(v->background, s->background, sizeof v->background);
     v->ambient = s->ambient;
+    v->objects = s->objects;
+    v->instances = s->instances;
+    v->num_objects = s->num_objects;
+    v->num_instances = s->num_instances;
+    return SC_OK;
+}
+
+sc_status sc_scene_add_instances(sc_scene *s, const sc_scene *sub, const float (*xfm)[12], size_t count,
+                                 const float *color, const float *emission, const char *what, char *err,
+                                 size_t errlen)
+{
+    const size_t nt = sub->num_triangles, nv = sub->num_vertices;
+    if (!nt || !count)
+        return SC_OK;
+    if (count > s->max_triangles / nt || count * nt > s->max_triangles - s->num_triangles)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT,
+                             "%s: %zu instances of %zu triangles exceed the cap of %llu triangles", what, count, nt,
+                             (unsigned long long)s->max_triangles);
+    if (nv > UINT32_MAX || count * nv > UINT32_MAX - s->num_vertices)
+        return sc_scene_errf(err, errlen, SC_ERR_LIMIT, "%s: instances need more than 2^32 vertices", what);
+    sc_status st = sc_scene_reserve(s, count * nv, count * nt, err, errlen);
+    if (st != SC_OK)
+        return st;
+    if (!grow((void **)&s->objects, &s->cap_objects, s->num_objects + 1, sizeof *s->objects) ||
+        !grow((void **)&s->instances, &s->cap_instances, s->num_instances + count, sizeof *s->instances))
+        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", what);
+    /* the object: one block, positions then indices */
+    float *block = malloc(12 * nv + 12 * nt);
+    if (!block)
+        return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", what);
+    uint32_t *oidx = (uint32_t *)(void *)(block + 3 * nv);
+    memcpy(block, sub->positions, 12 * nv);
+    memcpy(oidx, sub->indices, 12 * nt);
+    const size_t first_mesh = s->num_meshes;
+    for (size_t m = 0; st == SC_OK && m < sub->num_meshes; m++) {
+        uint32_t id;
+        st = sc_scene_new_mesh(s, color ? color : sub->mesh_colors + 3 * m, &id);
+        if (st == SC_OK && (emission || sub->mesh_emission))
+            st = sc_scene_set_mesh_emission(s, id, emission ? emission : sub->mesh_emission + 3 * m);
+    }
+    if (st != SC_OK) {
+        s->num_meshes = first_mesh;
+        free(block);
+        return sc_scene_errf(err, errlen, st, "%s: cannot add meshes: %s", what, sc_strerror(st));
+    }
+    const size_t v0 = s->num_vertices, t0 = s->num_triangles;
+    for (size_t c = 0; c < count; c++) {
+        const float *x = xfm[c];
+        const uint32_t base = (uint32_t)(v0 + c * nv);
+        for (size_t v = 0; v < nv; v++) {
+            const float *q = sub->positions + 3 * v;
+            for (int i = 0; i < 3; i++) {
+                const float f = (float)((double)x[4 * i] * q[0] + (double)x[4 * i + 1] * q[1] +
+                                        (double)x[4 * i + 2] * q[2] + x[4 * i + 3]);
+                if (!isfinite(f)) {
+                    s->num_meshes = first_mesh;
+                    free(block);
+                    return sc_scene_errf(err, errlen, SC_ERR_RANGE, "%s: instance %zu overflows float", what, c);
+                }
+                s->positions[3 * (base + v) + i] = f;
+            }
+        }
+        for (size_t t = 0; t < nt; t++) {
+            const size_t dst = t0 + c * nt + t;
+            for (int k = 0; k < 3; k++)
+                s->indices[3 * dst + k] = base + sub->indices[3 * t + k];
+            s->mesh_ids[dst] = (uint32_t)first_mesh + sub->mesh_ids[t];
+        }
+        sc_scene_instance *in = &s->instances[s->num_instances + c];
+        in->object = (uint32_t)s->num_objects;
+        memcpy(in->xfm, x, sizeof in->xfm);
+        in->first_triangle = t0 + c * nt;
+    }
+    s->objects[s->num_objects++] = (sc_mesh_view){ block, nv, oidx, nt, 0, 0 };
+    s->num_instances += count;
+    s->num_vertices = v0 + count * nv;
+    s->num_triangles = t0 + count * nt;
+    s->degenerate += count * sub->degenerate;
+    s->dropped_nonfinite += count * sub->dropped_nonfinite;
     return SC_OK;
 }
 

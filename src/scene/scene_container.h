@@ -22,6 +22,9 @@ struct sc_scene {
     sc_camera camera;
     float background[3];
     float ambient;
+    sc_mesh_view *objects;          /* instanced meshes; each owns one block (positions, then indices) */
+    sc_scene_instance *instances;
+    size_t num_objects, num_instances, cap_objects, cap_instances;
 
     /* Policy and bookkeeping copied from the options. */
     uint64_t max_triangles, max_pixels;
@@ -70,6 +73,15 @@ sc_status sc_scene_new_mesh(sc_scene *s, const float color[3], uint32_t *id);
 sc_status sc_scene_append_triangles(sc_scene *s, const float *positions, size_t num_vertices,
                                    const uint32_t *indices, size_t num_triangles, uint32_t mesh,
                                    char *err, size_t errlen);
+
+/* Adds sub's geometry as one object placed by each of the count transforms
+ * (row-major 3x4, object to world): the object kept in object space for
+ * sc_accel, and each instance's triangles appended to s (the transform
+ * applied in double, rounded once), with meshes of sub's colours (or
+ * color) and emission. what names the source in error messages. */
+sc_status sc_scene_add_instances(sc_scene *s, const sc_scene *sub, const float (*xfm)[12], size_t count,
+                                 const float *color, const float *emission, const char *what, char *err,
+                                 size_t errlen);
 
 /* Bounds of all vertices referenced by triangles (or a unit box when empty). */
 void sc_scene_bounds(const sc_scene *s, double lo[3], double hi[3]);
