@@ -113,15 +113,10 @@ sc_status sc_accel_attach_mesh(sc_accel *a, const sc_mesh_view *mesh, unsigned f
 {
     if (!a || !mesh || flags > SC_ACCEL_COPY || !sc_mesh_layout_ok(mesh) || a->nmesh >= UINT32_MAX - 1)
         return SC_ERR_INVALID_ARGUMENT;
-    if (mesh->triangle_count && (!mesh->positions || !mesh->indices))
-        return SC_ERR_INVALID_ARGUMENT;
     if (mesh->vertex_count > UINT32_MAX || mesh->triangle_count > (size_t)INT32_MAX)
         return SC_ERR_LIMIT;
-    for (size_t t = 0; t < mesh->triangle_count; t++) {
-        const uint32_t *ix = sc_mesh_triangle(mesh, t);
-        if (ix[0] >= mesh->vertex_count || ix[1] >= mesh->vertex_count || ix[2] >= mesh->vertex_count)
-            return SC_ERR_INVALID_ARGUMENT;
-    }
+    if (sc_bvh_check_mesh(mesh) != SC_OK)
+        return SC_ERR_INVALID_ARGUMENT;
     if (!grow((void **)&a->views, &a->cap_mesh, a->nmesh + 1, sizeof *a->views))
         return SC_ERR_OUT_OF_MEMORY;
     size_t cap = a->cap_mesh;
@@ -560,11 +555,18 @@ sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_t
     return SC_OK;
 }
 
+/* The streams' arguments: out is the result array, out_min its element size. */
+static int stream_ok(const sc_accel *a, const sc_ray *rays, size_t ray_stride, const void *out, size_t out_stride,
+                     size_t out_min, size_t n, unsigned flags)
+{
+    return a && (!n || (rays && out)) && ray_stride >= sizeof(sc_ray) && out_stride >= out_min && !flags &&
+           a->committed;
+}
+
 sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
                              size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *st)
 {
-    if (!a || (n && (!rays || !hits)) || ray_stride < sizeof(sc_ray) || hit_stride < sizeof(sc_hitrec) ||
-        flags || !a->committed)
+    if (!stream_ok(a, rays, ray_stride, hits, hit_stride, sizeof(sc_hitrec), n, flags))
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst && a->bvh) {
         sc_status s = sc_trace_closest_n(a->bvh, rays, ray_stride, hits, hit_stride, n, flags, st);
@@ -585,8 +587,7 @@ sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_s
 sc_status sc_accel_any_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
                          size_t occluded_stride, size_t n, unsigned flags, sc_trace_stats *st)
 {
-    if (!a || (n && (!rays || !occluded)) || ray_stride < sizeof(sc_ray) || occluded_stride < sizeof(int32_t) ||
-        flags || !a->committed)
+    if (!stream_ok(a, rays, ray_stride, occluded, occluded_stride, sizeof(int32_t), n, flags))
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst && a->bvh)
         return sc_trace_any_n(a->bvh, rays, ray_stride, occluded, occluded_stride, n, flags, st);

@@ -44,8 +44,7 @@ sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc
     return sc_bvh_build_set(mesh, 1, cfg_in, out);
 }
 
-/* Checks one mesh of the input: layout, arrays, indices in range. */
-static sc_status check_mesh(const sc_mesh_view *mesh)
+sc_status sc_bvh_check_mesh(const sc_mesh_view *mesh)
 {
     if (!sc_mesh_layout_ok(mesh))
         return SC_ERR_INVALID_ARGUMENT;
@@ -87,7 +86,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
             return SC_ERR_LIMIT;
     }
     for (size_t g = 0; g < mesh_count; g++) {
-        sc_status cs = check_mesh(&meshes[g]);
+        sc_status cs = sc_bvh_check_mesh(&meshes[g]);
         if (cs != SC_OK)
             return cs;
     }

@@ -41,6 +41,11 @@ static inline size_t sc_mesh_of(const uint32_t *first, size_t mesh_count, uint32
     return lo;
 }
 
+/* One mesh of a build, refit or scene: layout, arrays present, indices in
+ * range (vertices may be non-finite: such triangles are left out).
+ * INVALID_ARGUMENT otherwise. */
+sc_status sc_bvh_check_mesh(const sc_mesh_view *mesh);
+
 /* The build over several meshes at once (one tree; leaf ids are global
  * ids, sc_bvh.first maps them back): what sc_bvh_build does for one and the
  * scene handle (sc_accel.h) for its meshes. Same checks and errors. */

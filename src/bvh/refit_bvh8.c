@@ -47,15 +47,11 @@ sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_
      * fails leaves the tree as it was. */
     for (size_t g = 0; g < mesh_count; g++) {
         const sc_mesh_view *m = &meshes[g];
-        if (!sc_mesh_layout_ok(m) || m->triangle_count != (size_t)(bvh->first[g + 1] - bvh->first[g]))
-            return SC_ERR_INVALID_ARGUMENT;
-        if (m->triangle_count && (!m->positions || !m->indices))
+        if (sc_bvh_check_mesh(m) != SC_OK || m->triangle_count != (size_t)(bvh->first[g + 1] - bvh->first[g]))
             return SC_ERR_INVALID_ARGUMENT;
         for (size_t t = 0; t < m->triangle_count; t++) {
             const uint32_t *ix = sc_mesh_triangle(m, t);
             for (int corner = 0; corner < 3; corner++) {
-                if (ix[corner] >= m->vertex_count)
-                    return SC_ERR_INVALID_ARGUMENT;
                 const float *p = sc_mesh_vertex(m, ix[corner]);
                 if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
                     return SC_ERR_NONFINITE;
