@@ -60,7 +60,15 @@ cat > "$tmp/scene.json" <<EOF
   "lights": [ {"type": "point", "position": [0, 3, 2], "intensity": 2} ] }
 EOF
 
+cat > "$tmp/instances.json" <<EOF
+{ "meshes": [ {"file": "proc:sphere:500", "scale": 0.2,
+               "instances": { "grid": [3, 1, 2], "spacing": 0.5, "rotate_jitter": 30 } },
+              {"file": "$data/tetra.obj", "instances": [ {"translate": [1, 0, 0]}, {"scale": 0.5} ] } ],
+  "width": 48, "height": 32 }
+EOF
+
 # Good runs.
+run "render instances"          0 render "$tmp/instances.json" -o i.png -q
 run "render sphere + AO"        0 render proc:sphere:2k -o r.png --width 48 --height 32 --ao 2 -q
 run "render JSON scene"         0 render "$tmp/scene.json" -o j.png -q
 run "render debug heat"         0 render proc:slivers:1k -o h.png --width 32 --height 24 --debug heat -q
