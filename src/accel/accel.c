@@ -445,20 +445,19 @@ static sc_status build_meshes(sc_accel *a)
     return SC_OK;
 }
 
-sc_status sc_accel_commit(sc_accel *a)
+/* Every instanced scene still committed (its tree is what the top level's
+ * boxes are built from). */
+static int objects_committed(const sc_accel *a)
 {
-    if (!a)
-        return SC_ERR_INVALID_ARGUMENT;
     for (size_t i = 0; i < a->ninst; i++)
         if (!a->inst[i].obj->committed)
-            return SC_ERR_INVALID_ARGUMENT;
-    double t0 = sc_now_seconds();
-    a->committed = 0;
-    /* Meshes attached or updated since the last build are built afresh
-     * (only sc_accel_refit refits); the top level always is. */
-    sc_status st = SC_OK;
-    if (a->bvh_stale || a->bvh_meshes != a->nmesh)
-        st = build_meshes(a);
+            return 0;
+    return 1;
+}
+
+/* The end of a commit or refit: the top level, then committed. */
+static sc_status finish(sc_accel *a, sc_status st, double t0)
+{
     if (st == SC_OK)
         st = build_top(a);
     if (st != SC_OK)
@@ -468,15 +467,30 @@ sc_status sc_accel_commit(sc_accel *a)
     return SC_OK;
 }
 
+sc_status sc_accel_commit(sc_accel *a)
+{
+    if (!a)
+        return SC_ERR_INVALID_ARGUMENT;
+    if (!objects_committed(a))
+        return SC_ERR_INVALID_ARGUMENT;
+    double t0 = sc_now_seconds();
+    a->committed = 0;
+    /* Meshes attached or updated since the last build are built afresh
+     * (only sc_accel_refit refits); the top level always is. */
+    sc_status st = SC_OK;
+    if (a->bvh_stale || a->bvh_meshes != a->nmesh)
+        st = build_meshes(a);
+    return finish(a, st, t0);
+}
+
 sc_status sc_accel_refit(sc_accel *a)
 {
     if (!a)
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->bvh || a->bvh_meshes != a->nmesh)
         return sc_accel_commit(a);
-    for (size_t i = 0; i < a->ninst; i++)
-        if (!a->inst[i].obj->committed)
-            return SC_ERR_INVALID_ARGUMENT;
+    if (!objects_committed(a))
+        return SC_ERR_INVALID_ARGUMENT;
     double t0 = sc_now_seconds();
     a->committed = 0;
     sc_status st = sc_bvh_refit_set(a->bvh, a->views, a->nmesh);
@@ -486,13 +500,7 @@ sc_status sc_accel_refit(sc_accel *a)
         a->refits++;
     else if (st == SC_ERR_NONFINITE || st == SC_ERR_LIMIT)
         st = build_meshes(a);
-    if (st == SC_OK)
-        st = build_top(a);
-    if (st != SC_OK)
-        return st;
-    a->committed = 1;
-    a->build_seconds = sc_now_seconds() - t0;
-    return SC_OK;
+    return finish(a, st, t0);
 }
 
 /* ---- trace -------------------------------------------------------------- */
