@@ -456,6 +456,17 @@ static void test_instances(void **state)
             int occ;
             assert_int_equal(sc_accel_any(world, &rays[r], &occ, NULL), SC_OK);
             assert_int_equal(occ, h.prim != SC_HITREC_MISS);
+            /* the counting kernels give the same answers, one ray counted once */
+            sc_trace_stats ts;
+            memset(&ts, 0, sizeof ts);
+            sc_hitrec hs;
+            int occ_s;
+            assert_int_equal(sc_accel_closest(world, &rays[r], &hs, &ts), SC_OK);
+            assert_int_equal(sc_accel_any(world, &rays[r], &occ_s, &ts), SC_OK);
+            assert_true(same_bits(&hs, &h));
+            assert_int_equal(occ_s, occ);
+            assert_int_equal(ts.rays, 2);
+            assert_true(ts.nodes >= 1);
         }
         print_message("test %d: %zu of %zu rays hit, %zu through instances; %zu exact ties\n", test, hits, N,
                       inst_hits, ties);

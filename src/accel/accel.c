@@ -16,6 +16,7 @@
 #include "bvh/build_binned_sah.h"
 #include "bvh/bvh_internal.h"
 #include "common/sc_clock.h"
+#include "common/sc_grow.h"
 #include "spherecull/sc_accel.h"
 #include "isa/isa_dispatch.h"
 #include "trace/trace_top.h"
@@ -94,21 +95,6 @@ void sc_accel_release(sc_accel *a)
 
 /* ---- attach --------------------------------------------------------------- */
 
-static int grow(void **arr, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap)
-        return 1;
-    size_t c = *cap ? 2 * *cap : 8;
-    while (c < need)
-        c *= 2;
-    void *p = realloc(*arr, c * size);
-    if (!p)
-        return 0;
-    *arr = p;
-    *cap = c;
-    return 1;
-}
-
 sc_status sc_accel_attach_mesh(sc_accel *a, const sc_mesh_view *mesh, unsigned flags, uint32_t *geom_id)
 {
     if (!a || !mesh || flags > SC_ACCEL_COPY || !sc_mesh_layout_ok(mesh) || a->nmesh >= UINT32_MAX - 1)
@@ -117,7 +103,7 @@ sc_status sc_accel_attach_mesh(sc_accel *a, const sc_mesh_view *mesh, unsigned f
         return SC_ERR_LIMIT;
     if (sc_bvh_check_mesh(mesh) != SC_OK)
         return SC_ERR_INVALID_ARGUMENT;
-    if (!grow((void **)&a->views, &a->cap_mesh, a->nmesh + 1, sizeof *a->views))
+    if (!sc_grow((void **)&a->views, &a->cap_mesh, a->nmesh + 1, sizeof *a->views))
         return SC_ERR_OUT_OF_MEMORY;
     size_t cap = a->cap_mesh;
     void *copies = realloc(a->copies, cap * sizeof *a->copies);
@@ -203,7 +189,7 @@ sc_status sc_accel_attach_instance(sc_accel *a, sc_accel *obj, const float xfm[1
     accel_inst in = { 0 };
     if (!inst_set(&in, xfm))
         return SC_ERR_INVALID_ARGUMENT;
-    if (!grow((void **)&a->inst, &a->cap_inst, a->ninst + 1, sizeof *a->inst))
+    if (!sc_grow((void **)&a->inst, &a->cap_inst, a->ninst + 1, sizeof *a->inst))
         return SC_ERR_OUT_OF_MEMORY;
     in.obj = obj;
     sc_accel_retain(obj);

@@ -126,6 +126,8 @@ static sc_status occluded(void *ctx, const sc_ray *rays, size_t n, uint8_t *occ,
     sc_status st = SC_OK;
     for (size_t i = 0; i < n; i += 256) {
         const size_t m = n - i < 256 ? n - i : 256;
+        for (size_t j = 0; j < m; j++)
+            buf[j] = occ[i + j];   /* a refused ray keeps what the caller put, as render.c's own */
         sc_status s = sc_accel_any_n(a->world, rays + i, sizeof *rays, buf, sizeof *buf, m, 0, NULL);
         if (s != SC_OK)
             st = s;

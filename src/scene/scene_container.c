@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/sc_grow.h"
 #include "scene_container.h"
 
 void sc_scene_options_init(sc_scene_options *o)
@@ -174,28 +175,6 @@ void sc_scene_free(sc_scene *s)
     free(s);
 }
 
-/* Grows *p to hold at least need elements of size elem, doubling. */
-static int grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 1;
-    /* Doubling for many small appends, exact for one big mesh (no 2x
-     * overshoot on a 50M-triangle model). */
-    size_t c = *cap <= SIZE_MAX / 2 ? 2 * *cap : SIZE_MAX;
-    if (c < need)
-        c = need;
-    if (c < 16)
-        c = 16;
-    if (c > SIZE_MAX / elem)
-        return 0;
-    void *q = realloc(*p, c * elem);
-    if (!q)
-        return 0;
-    *p = q;
-    *cap = c;
-    return 1;
-}
-
 sc_status sc_scene_reserve(sc_scene *s, size_t more_v, size_t more_t, char *err, size_t errlen)
 {
     uint64_t max_v = s->max_triangles > UINT32_MAX / 3 ? UINT32_MAX : 3 * s->max_triangles;
@@ -210,11 +189,11 @@ sc_status sc_scene_reserve(sc_scene *s, size_t more_v, size_t more_t, char *err,
                              (unsigned long long)s->num_vertices + (unsigned long long)more_v,
                              (unsigned long long)max_v);
     size_t nv = s->num_vertices + more_v, nt = s->num_triangles + more_t;
-    /* grow() changes an array only on success, so a failure leaves a
+    /* sc_grow() changes an array only on success, so a failure leaves a
      * consistent (if larger) scene behind. */
-    if (!grow((void **)&s->positions, &s->cap_vertices, nv, 3 * sizeof(float)) ||
-        !grow((void **)&s->indices, &s->cap_triangles, nt, 3 * sizeof(uint32_t)) ||
-        !grow((void **)&s->mesh_ids, &s->cap_mesh_ids, nt, sizeof(uint32_t)))
+    if (!sc_grow((void **)&s->positions, &s->cap_vertices, nv, 3 * sizeof(float)) ||
+        !sc_grow((void **)&s->indices, &s->cap_triangles, nt, 3 * sizeof(uint32_t)) ||
+        !sc_grow((void **)&s->mesh_ids, &s->cap_mesh_ids, nt, sizeof(uint32_t)))
         return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY,
                              "out of memory for %zu triangles", nt);
     return SC_OK;
@@ -231,8 +210,8 @@ sc_status sc_scene_new_mesh(sc_scene *s, const float color[3], uint32_t *id)
 {
     if (s->num_meshes >= UINT32_MAX)
         return SC_ERR_LIMIT;
-    if (!grow((void **)&s->mesh_colors, &s->cap_meshes, s->num_meshes + 1, 3 * sizeof(float)) ||
-        !grow((void **)&s->mesh_emission, &s->cap_emission, s->num_meshes + 1, 3 * sizeof(float)))
+    if (!sc_grow((void **)&s->mesh_colors, &s->cap_meshes, s->num_meshes + 1, 3 * sizeof(float)) ||
+        !sc_grow((void **)&s->mesh_emission, &s->cap_emission, s->num_meshes + 1, 3 * sizeof(float)))
         return SC_ERR_OUT_OF_MEMORY;
     float *c = s->mesh_colors + 3 * s->num_meshes;
     for (int i = 0; i < 3; i++) {
@@ -385,7 +364,7 @@ sc_status sc_scene_add_light(sc_scene *s, const sc_light *l)
         for (int i = 0; i < 3; i++)
             copy.vec[i] = (float)(l->vec[i] / n);
     }
-    if (!grow((void **)&s->lights, &s->cap_lights, s->num_lights + 1, sizeof(sc_light)))
+    if (!sc_grow((void **)&s->lights, &s->cap_lights, s->num_lights + 1, sizeof(sc_light)))
         return SC_ERR_OUT_OF_MEMORY;
     s->lights[s->num_lights++] = copy;
     return SC_OK;
@@ -529,8 +508,8 @@ sc_status sc_scene_add_instances(sc_scene *s, const sc_scene *sub, const float (
     sc_status st = sc_scene_reserve(s, count * nv, count * nt, err, errlen);
     if (st != SC_OK)
         return st;
-    if (!grow((void **)&s->objects, &s->cap_objects, s->num_objects + 1, sizeof *s->objects) ||
-        !grow((void **)&s->instances, &s->cap_instances, s->num_instances + count, sizeof *s->instances))
+    if (!sc_grow((void **)&s->objects, &s->cap_objects, s->num_objects + 1, sizeof *s->objects) ||
+        !sc_grow((void **)&s->instances, &s->cap_instances, s->num_instances + count, sizeof *s->instances))
         return sc_scene_errf(err, errlen, SC_ERR_OUT_OF_MEMORY, "%s: out of memory", what);
     /* the object: one block, positions then indices */
     float *block = malloc(12 * nv + 12 * nt);

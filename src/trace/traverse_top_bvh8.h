@@ -27,22 +27,23 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
     }
     const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
     sc_trace_stats s = { 0 };
-    if (ANY) {
-        int hit = st ? k->any_stats(b, &r, &s) : k->any(b, &r);
-        if (st)
-            st->nodes += s.nodes, st->leaves += s.leaves, st->sphere_tests += s.sphere_tests,
-                st->sphere_rejects += s.sphere_rejects, st->tri_tests += s.tri_tests, st->tri_hits += s.tri_hits;
-        return hit;
-    }
+    int occ = 0;
     sc_hitrec h;
-    r.tmax = best->t;
-    if (st)
-        k->closest_stats(b, &r, &h, &s);
-    else
-        k->closest(b, &r, &h);
+    if (ANY) {
+        occ = st ? k->any_stats(b, &r, &s) : k->any(b, &r);
+    } else {
+        r.tmax = best->t;
+        if (st)
+            k->closest_stats(b, &r, &h, &s);
+        else
+            k->closest(b, &r, &h);
+    }
+    /* the item's counters, but not its ray: the caller counts the world ray once */
     if (st)
         st->nodes += s.nodes, st->leaves += s.leaves, st->sphere_tests += s.sphere_tests,
             st->sphere_rejects += s.sphere_rejects, st->tri_tests += s.tri_tests, st->tri_hits += s.tri_hits;
+    if (ANY)
+        return occ;
     sc_top_map_ids(b, &h);
     if (h.prim != SC_HITREC_MISS)
         h.inst = it->inst;
