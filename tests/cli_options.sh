@@ -109,6 +109,21 @@ if "$S" compare --help | grep -q 'embree-high'; then
              exit bad
            }' y.csv > y.out || no "compare yardstick columns: $(cat y.out)"
 fi
+"$S" compare 'a,b.obj' --instances many > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --instances many: not a usage error"
+# a scene with instances is compared through them (the instances column),
+# or flattened on request
+cat > inst.json <<'JSON'
+{ "meshes": [ { "file": "tet.obj", "instances": [ { "translate": [0, 0, 0] }, { "translate": [3, 0, 0], "rotate": [0, 40, 0] } ] } ] }
+JSON
+cp 'a,b.obj' tet.obj
+for mode in trace flat; do
+  "$S" compare inst.json --instances $mode --repeats 1 --count 64 --oracle-rays 16 --width 16 --rays primary \
+      --tracers spherecull-exact --threads 1 --min-time 0 --csv=i.csv > /dev/null 2>&1 || no "compare --instances $mode: exit status $?"
+  want=2; [ $mode = flat ] && want=0
+  awk -F, -v want=$want 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+       { n++; if ($c["instances"] != want || $c["hit_miss_disagree"] != 0 || $c["primid_disagree"] != 0) bad = 1 }
+       END { exit bad || n != 1 }' i.csv || no "compare --instances $mode: $(cat i.csv)"
+done
 "$S" compare 'a,b.obj' --mxcsr fast > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --mxcsr fast: not a usage error"
 "$S" compare 'a,b.obj' --min-time -1 > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --min-time -1: not a usage error"
 

@@ -6,3 +6,5 @@ if(TARGET spherecull_embree)
   # sc_rtcray.h's RTCRay offsets against embree3/rtcore_ray.h.
   sc_add_test(test_rtcray SOURCES test_rtcray.c LIBS spherecull_embree)
 endif()
+# compare's tracers, oracle and rows through a scene's instances.
+sc_add_test(test_compare_instances SOURCES test_compare_instances.c LIBS spherecull_compare spherecull_scene FTZ)

@@ -217,12 +217,153 @@ static void test_closed_mesh_edge_rays_hit(void **state)
     sc_proc_free(&pm);
 }
 
+/* ---- through instances ------------------------------------------------------ */
+
+typedef struct xlate_ctx {
+    const sc_scene_instance *inst;
+} xlate_ctx;
+
+/* Translations by integers of points on a 2^-12 grid are exact in float:
+ * the object ray is the world ray moved, with the same exact hits. */
+static sc_status xlate_ray(void *ctx, size_t i, const sc_ray *w, sc_ray *o)
+{
+    const xlate_ctx *c = ctx;
+    *o = *w;
+    for (int k = 0; k < 3; k++)
+        o->org[k] = w->org[k] - c->inst[i].xfm[4 * k + 3];
+    return SC_OK;
+}
+
+static float q12(double x)
+{
+    return (float)(nearbyint(x * 4096) / 4096);
+}
+
+/* The oracle through instances decides each instance's object ray; with
+ * exact translations that is the flattened mesh's question, so the two
+ * answers (hit, t, ties, and with crossing the first crossing) must be the
+ * same. dup: two instances coincide, so ties run across instances. */
+static void scene_equals_flat(int dup)
+{
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(2, &pm), SC_OK);
+    const size_t ov = pm.vertex_count, ot = pm.triangle_count;
+    float *opos = malloc(3 * ov * sizeof *opos);
+    for (size_t k = 0; k < 3 * ov; k++)
+        opos[k] = q12(pm.positions[k]);
+    const sc_mesh_view obj = { opos, ov, pm.indices, ot, 0, 0 };
+    enum { NI = 6 };
+    sc_scene_instance inst[NI];
+    const size_t own_n = 7, nt = own_n + NI * ot, nv = 12 + NI * ov;
+    float *pos = malloc(3 * nv * sizeof *pos);
+    uint32_t *idx = malloc(3 * nt * sizeof *idx), own_prim[7];
+    memcpy(pos, P, sizeof P);
+    memcpy(idx, I, sizeof I);
+    for (uint32_t k = 0; k < own_n; k++)
+        own_prim[k] = k;
+    for (int i = 0; i < NI; i++) {
+        const int j = dup && i == NI - 1 ? i - 1 : i;            /* the last one on the one before */
+        const float T[3] = { (float)(3 * j - 6), (float)(j % 2 ? 5 : -4), (float)(j % 3) };
+        memset(&inst[i], 0, sizeof inst[i]);
+        inst[i].object = 0;
+        inst[i].first_triangle = own_n + (size_t)i * ot;
+        inst[i].xfm[0] = inst[i].xfm[5] = inst[i].xfm[10] = 1;
+        for (int k = 0; k < 3; k++)
+            inst[i].xfm[4 * k + 3] = T[k];
+        for (size_t v = 0; v < ov; v++)
+            for (int k = 0; k < 3; k++)
+                pos[3 * (12 + i * ov + v) + k] = opos[3 * v + k] + T[k];    /* exact */
+        for (size_t t = 0; t < 3 * ot; t++)
+            idx[3 * inst[i].first_triangle + t] = (uint32_t)(12 + i * ov) + pm.indices[t];
+    }
+    const sc_mesh_view flat = { pos, nv, idx, nt, 0, 0 };
+    sc_checked_mesh cflat = sc_test_checked(&flat), cobj = sc_test_checked(&obj);
+    const sc_mesh_view ownv = { P, 12, I, 7, 0, 0 };
+    sc_checked_mesh cown = sc_test_checked(&ownv);
+    /* rays on the 2^-8 grid aimed at flat vertices (vertex and edge ties)
+     * or at grid points in the box: every difference is exact */
+    enum { NR = 1500 };
+    sc_ray *rays = malloc(NR * sizeof *rays);
+    sc_rng rng;
+    sc_rng_seed(&rng, 11 + (uint64_t)dup);
+    for (size_t r = 0; r < NR; r++) {
+        float o[3], tg[3];
+        for (int k = 0; k < 3; k++)
+            o[k] = q12(nearbyint(((double)(sc_rng_next(&rng) >> 11) / 9007199254740992.0 * 60 - 30) * 256) / 256);
+        if (r % 2) {
+            const float *v = pos + 3 * (sc_rng_next(&rng) % nv);
+            memcpy(tg, v, sizeof tg);
+        } else {
+            for (int k = 0; k < 3; k++)
+                tg[k] = cflat.lo[k] + q12((double)(sc_rng_next(&rng) >> 11) / 9007199254740992.0 *
+                                          (cflat.hi[k] - cflat.lo[k]));
+        }
+        rays[r] = (sc_ray){ { o[0], o[1], o[2] }, 0, { tg[0] - o[0], tg[1] - o[1], tg[2] - o[2] }, INFINITY };
+        if (r % 7 == 0)
+            rays[r].tmax = 0.999f;            /* stops short of the target vertex */
+    }
+    const int flags = dup ? SC_ORACLE_LATER_HIT : SC_ORACLE_CROSSING | SC_ORACLE_LATER_HIT;
+    sc_oracle of, os;
+    assert_int_equal(sc_oracle_run(&cflat, rays, NR, 2, flags, &of), SC_OK);
+    xlate_ctx ctx = { inst };
+    const sc_oracle_scene sc = { &cown, own_prim, &cobj, 1, inst, NI, xlate_ray, &ctx };
+    assert_int_equal(sc_oracle_run_scene(&sc, rays, NR, 2, flags, &os), SC_OK);
+    assert_int_equal(os.count, (size_t)NR);
+    size_t hits = 0, ties = 0, cross_inst = 0;
+    for (size_t r = 0; r < NR; r++) {
+        const sc_oracle_hit *a = &of.hits[r], *b = &os.hits[r];
+        assert_int_equal(a->hit, b->hit);
+        hits += (size_t)a->hit;
+        if (!a->hit)
+            continue;
+        assert_true(a->t == b->t);
+        assert_int_equal(a->crosses, b->crosses);
+        assert_int_equal(a->tie_count, b->tie_count);
+        ties += a->tie_count > 1;
+        for (uint32_t k = 0; k < a->tie_count && k < SC_ORACLE_MAX_TIES; k++)
+            assert_int_equal(a->ties[k], b->ties[k]);
+        if (dup && a->tie_count > 1 && a->ties[a->tie_count - 1] >= inst[NI - 1].first_triangle &&
+            a->ties[0] < inst[NI - 1].first_triangle)
+            cross_inst++;
+        if (dup)
+            continue;
+        assert_int_equal(a->first_kind, b->first_kind);
+        assert_true(a->cross_t == b->cross_t || (isinf(a->cross_t) && isinf(b->cross_t)));
+        assert_int_equal(a->cross_tie_count, b->cross_tie_count);
+        for (uint32_t k = 0; k < a->cross_tie_count && k < SC_ORACLE_MAX_TIES; k++)
+            assert_int_equal(a->cross_ties[k], b->cross_ties[k]);
+    }
+    /* the sets are not vacuous: hits, vertex ties, and (dup) ties across the
+     * two coincident instances */
+    assert_true(hits > NR / 3);
+    assert_true(ties > NR / 10);
+    if (dup)
+        assert_true(cross_inst > 20);
+    sc_oracle_free(&of), sc_oracle_free(&os);
+    free(rays), free(pos), free(idx), free(opos);
+    sc_proc_free(&pm);
+}
+
+static void test_scene_translations_equal_flat(void **state)
+{
+    (void)state;
+    scene_equals_flat(0);
+}
+
+static void test_scene_coincident_instances_tie(void **state)
+{
+    (void)state;
+    scene_equals_flat(1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_constructed_ties),
         cmocka_unit_test(test_matches_brute_force),
         cmocka_unit_test(test_closed_mesh_edge_rays_hit),
+        cmocka_unit_test(test_scene_translations_equal_flat),
+        cmocka_unit_test(test_scene_coincident_instances_tie),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -105,6 +105,25 @@ typedef struct sc_embree_info {
  * SC_ERR_OUT_OF_MEMORY. The mesh is copied; it need not outlive the call. */
 SC_API sc_status sc_embree_create(const sc_checked_mesh *mesh, const sc_embree_config *cfg,
                                   sc_embree **out);
+/* One instance for sc_embree_create_instanced: objects[object] placed by
+ * a 3x4 row-major object-to-world transform (RTC_FORMAT_FLOAT3X4_ROW_MAJOR,
+ * as sc_accel_attach_instance). */
+typedef struct sc_embree_instance {
+    uint32_t object;
+    float xfm[12];
+} sc_embree_instance;
+
+/* The scene an Embree user builds for instances: one scene per object (a
+ * triangle geometry each), and a top scene of RTC_GEOMETRY_TYPE_INSTANCE
+ * geometries plus, if own has triangles, one mesh of its own (own may be
+ * NULL). Hits report inst (the instance's index, or SC_INVALID_ID for own's
+ * triangles), geom 0 and prim (in the object, or in own). Native modes only
+ * (DEFAULT, ROBUST, COMPACT; else SC_ERR_UNSUPPORTED); the flags and build
+ * quality apply to every scene. Meshes are copied; info.triangles counts
+ * the instanced triangles. */
+SC_API sc_status sc_embree_create_instanced(const sc_checked_mesh *own, const sc_checked_mesh *objects,
+                                            size_t num_objects, const sc_embree_instance *instances,
+                                            size_t num_instances, const sc_embree_config *cfg, sc_embree **out);
 SC_API void sc_embree_destroy(sc_embree *e);
 SC_API sc_status sc_embree_get_info(const sc_embree *e, sc_embree_info *info);
 

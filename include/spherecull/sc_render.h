@@ -176,10 +176,24 @@ SC_API sc_status sc_render_integrator_from_name(const char *name, sc_render_inte
  * arrays must outlive it. Threads: the backend may be called from any
  * number of threads. */
 typedef struct sc_scene_accel sc_scene_accel;
+/* The triangles of view->mesh that no instance owns, as one mesh beside
+ * the instances: *indices (3 per triangle, into view->mesh's vertices) and
+ * *prims (each one's index in view->mesh), *count of them; free both. */
+SC_API sc_status sc_scene_view_own_triangles(const sc_scene_view *view, uint32_t **indices, uint32_t **prims,
+                                             size_t *count);
 SC_API sc_status sc_scene_accel_build(const sc_scene_view *view, const sc_bvh_config *cfg, sc_scene_accel **out);
 SC_API void sc_scene_accel_free(sc_scene_accel *accel);
 /* *out calls the scene accel; it stays valid while accel lives. */
 SC_API void sc_scene_accel_backend(sc_scene_accel *accel, sc_render_backend *out);
+/* What the backend does, with the tracer's statistics (stats may be NULL;
+ * added to): closest hits as view->mesh indices, or occluded[i] = 0/1. */
+SC_API sc_status sc_scene_accel_closest(const sc_scene_accel *accel, const sc_ray *rays, size_t n, sc_hitrec *hits,
+                                        sc_trace_stats *stats);
+SC_API sc_status sc_scene_accel_any(const sc_scene_accel *accel, const sc_ray *rays, size_t n, uint8_t *occluded,
+                                    sc_trace_stats *stats);
+/* The top-level scene: its instance i is view->instances[i]
+ * (sc_accel_instance_ray gives the object-space ray a hit is exact for). */
+SC_API const sc_accel *sc_scene_accel_world(const sc_scene_accel *accel);
 /* The top-level scene's info (bytes: the top level and the rest's tree),
  * and the bytes and build seconds of everything (objects included). */
 SC_API sc_status sc_scene_accel_info(const sc_scene_accel *accel, sc_accel_info *world, size_t *total_bytes,

@@ -21,7 +21,7 @@
 #define CMD "compare"
 
 enum { O_RAYS, O_TRACERS, O_THREADS, O_ORACLE, O_REPEATS, O_MIN_TIME, O_MXCSR, O_WIDTH, O_COUNT, O_SEED, O_CSV,
-       O_JSON, O_PLOT };
+       O_JSON, O_PLOT, O_INSTANCES };
 static const sc_cli_opt opts[] = {
     [O_RAYS] = { "rays", 0, "LIST", "comma list of primary,shadow,diffuse,random,adversarial", "all" },
     [O_TRACERS] = { "tracers", 0, "LIST", "comma list of tracer names (below)", "all of this build" },
@@ -37,6 +37,9 @@ static const sc_cli_opt opts[] = {
     [O_CSV] = { "csv", 0, "FILE", "write all rows as CSV", NULL },
     [O_JSON] = { "json", 0, "FILE", "write all rows as JSON", NULL },
     [O_PLOT] = { "plot", 0, "DIR", "write gnuplot PNGs (and their data) there", NULL },
+    [O_INSTANCES] = { "instances", 0, "MODE", "a scene with instances: 'trace' through them (the tracers "
+                                              "without that path are skipped) or 'flat' (its flattened mesh)",
+                      "trace" },
 };
 
 typedef struct args {
@@ -164,6 +167,13 @@ static int on_option(void *ctx, int opt, const char *val)
     case O_CSV: a->csv = val; return 0;
     case O_JSON: a->json = val; return 0;
     case O_PLOT: a->plot = val; return 0;
+    case O_INSTANCES:
+        if (strcmp(val, "trace") != 0 && strcmp(val, "flat") != 0) {
+            sc_cli_error(CMD, "--instances: '%s' is not trace or flat", val);
+            return 2;
+        }
+        a->opt.flatten = strcmp(val, "flat") == 0;
+        return 0;
     }
     return 0;
 }
@@ -189,7 +199,7 @@ static int compare_scene(const char *spec, const sc_cmp_options *opt, sc_cmp_row
     const char *base = strrchr(spec, '/');
     base = base ? base + 1 : spec;
     fprintf(stderr, "%s: %zu triangles\n", base, v.mesh.triangle_count);
-    sc_status st = sc_cmp_scene(base, &mesh, &v.camera, v.lights, v.num_lights, opt, rows, stderr, err, sizeof err);
+    sc_status st = sc_cmp_scene(base, &mesh, &v, &v.camera, v.lights, v.num_lights, opt, rows, stderr, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {
         sc_cli_error(CMD, "%s", err[0] ? err : sc_strerror(st));
@@ -245,7 +255,7 @@ static int compare_distributed(sc_mpi *mpi, const args *a, sc_cmp_rows *rows)
             }
             opt.ray_kinds = 1u << k;
             size_t before = mine.count;
-            st = sc_cmp_scene(base, &mesh, &v.camera, v.lights, v.num_lights, &opt, &mine, rank == 0 ? stderr : NULL,
+            st = sc_cmp_scene(base, &mesh, &v, &v.camera, v.lights, v.num_lights, &opt, &mine, rank == 0 ? stderr : NULL,
                               err, sizeof err);
             if (st != SC_OK) {
                 snprintf(loaded_err, sizeof loaded_err, "%s", err[0] ? err : sc_strerror(st));

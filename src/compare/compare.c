@@ -131,6 +131,14 @@ typedef struct cmp_run {
     int closed;
     sc_tracer tr[SC_CMP_MAX_TRACERS];
     int ntr;
+    /* Through instances (NULL: the flat mesh): the view, and what the
+     * oracle needs: the own triangles, the objects checked, and a scene
+     * accel whose object-space rays are the ones the hits are exact for. */
+    const sc_scene_view *iv;
+    sc_checked_mesh own, *objects;
+    uint32_t *own_idx, *own_prim;
+    size_t num_own;
+    sc_scene_accel *oracle_accel;
     sc_rayset sets[SC_RAYS_KIND_COUNT];
     sc_hitrec *hits;
     uint8_t *occ;
@@ -145,6 +153,43 @@ static void run_free(cmp_run *r)
     for (int i = 0; i < r->ntr; i++)
         sc_tracer_free(&r->tr[i]);
     free(r->hits), free(r->occ), free(r->sample), free(r->srays);
+    free(r->objects), free(r->own_idx), free(r->own_prim);
+    sc_scene_accel_free(r->oracle_accel);
+}
+
+static sc_status object_ray(void *ctx, size_t inst, const sc_ray *world, sc_ray *obj)
+{
+    return sc_accel_instance_ray(sc_scene_accel_world(ctx), (uint32_t)inst, world, obj);
+}
+
+static sc_status oracle_run(cmp_run *r, const sc_ray *rays, size_t n, int flags, sc_oracle *orc)
+{
+    if (!r->iv)
+        return sc_oracle_run(&r->mesh, rays, n, r->opt->oracle_threads, flags, orc);
+    const sc_oracle_scene sc = { r->num_own ? &r->own : NULL, r->own_prim, r->objects, r->iv->num_objects,
+                                 r->iv->instances, r->iv->num_instances, object_ray, r->oracle_accel };
+    return sc_oracle_run_scene(&sc, rays, n, r->opt->oracle_threads, flags, orc);
+}
+
+/* The oracle's view of the instances (see cmp_run). */
+static sc_status prepare_instances(cmp_run *r)
+{
+    const sc_scene_view *v = r->iv;
+    sc_status st = sc_scene_view_own_triangles(v, &r->own_idx, &r->own_prim, &r->num_own);
+    if (st != SC_OK)
+        return st;
+    if (r->num_own) {
+        const sc_mesh_view own = { v->mesh.positions, v->mesh.vertex_count, r->own_idx, r->num_own,
+                                   v->mesh.vertex_stride, 0 };
+        if ((st = sc_mesh_check(&own, &r->own)) != SC_OK)
+            return st;
+    }
+    if (!(r->objects = calloc(v->num_objects ? v->num_objects : 1, sizeof *r->objects)))
+        return SC_ERR_OUT_OF_MEMORY;
+    for (size_t k = 0; k < v->num_objects; k++)
+        if ((st = sc_mesh_check(&v->objects[k], &r->objects[k])) != SC_OK)
+            return st;
+    return sc_scene_accel_build(v, NULL, &r->oracle_accel);
 }
 
 static sc_status fail(cmp_run *r, sc_status st, const char *what)
@@ -162,7 +207,12 @@ static sc_status build_tracers(cmp_run *r)
         if (!wanted(r->opt, names[d]))
             continue;
         double t0 = sc_now_seconds();
-        sc_status st = sc_tracer_build(&r->tr[r->ntr], sc_tracer_find(names[d]), &r->mesh);
+        sc_status st = r->iv ? sc_tracer_build_scene(&r->tr[r->ntr], sc_tracer_find(names[d]), r->iv)
+                             : sc_tracer_build(&r->tr[r->ntr], sc_tracer_find(names[d]), &r->mesh);
+        if (st == SC_ERR_UNSUPPORTED && r->iv) {
+            if (r->log) fprintf(r->log, "  %s: no path through instances (skipped)\n", names[d]);
+            continue;
+        }
         if (st != SC_OK) {
             if (r->log) fprintf(r->log, "  %s: build failed: %s (skipped)\n", names[d], sc_strerror(st));
             continue;
@@ -192,7 +242,8 @@ static sc_status secondary_rays(cmp_run *r, const float light[3])
             rd = sc_tracer_find(names[d]);
     sc_hitrec *ref_hits = malloc((prim->count ? prim->count : 1) * sizeof *ref_hits);
     sc_tracer reft;
-    if (!rd || !ref_hits || sc_tracer_build(&reft, rd, &r->mesh) != SC_OK) {
+    if (!rd || !ref_hits ||
+        (r->iv ? sc_tracer_build_scene(&reft, rd, r->iv) : sc_tracer_build(&reft, rd, &r->mesh)) != SC_OK) {
         free(ref_hits);
         if (r->err) snprintf(r->err, r->errlen, "%s: no reference tracer for shadow rays", r->scene);
         return SC_ERR_OUT_OF_MEMORY;
@@ -292,6 +343,7 @@ static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy 
             return SC_ERR_OUT_OF_MEMORY;
         snprintf(row->scene, sizeof row->scene, "%s", r->scene);
         row->triangles = r->mesh.view.triangle_count;
+        row->instances = r->iv ? r->iv->num_instances : 0;
         row->closed = r->closed;
         row->rays = (sc_rayset_kind)k;
         row->nrays = set->count;
@@ -342,8 +394,7 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
     }
     sc_oracle orc;
     double t0 = sc_now_seconds();
-    sc_status st = sc_oracle_run(&r->mesh, r->srays, ns, opt->oracle_threads,
-                                 k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
+    sc_status st = oracle_run(r, r->srays, ns, k == SC_RAYS_ADVERSARIAL ? SC_ORACLE_CROSSING : 0, &orc);
     if (st != SC_OK)
         return fail(r, st, "oracle");
     size_t ohits = 0;
@@ -408,9 +459,9 @@ static void embree_ratios(sc_cmp_rows *out, size_t first_row)
     }
 }
 
-sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
-                       const sc_light *lights, size_t nlights, const sc_cmp_options *opt, sc_cmp_rows *out,
-                       FILE *log, char *err, size_t errlen)
+sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_scene_view *instances,
+                       const sc_camera *camera, const sc_light *lights, size_t nlights, const sc_cmp_options *opt,
+                       sc_cmp_rows *out, FILE *log, char *err, size_t errlen)
 {
     if (err && errlen)
         err[0] = 0;
@@ -430,6 +481,16 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
         return st;
     }
     sc_mesh_is_closed(&r.mesh, &r.closed);
+    if (instances && instances->num_instances && !opt->flatten) {
+        r.iv = instances;
+        if ((st = prepare_instances(&r)) != SC_OK) {
+            if (err) snprintf(err, errlen, "%s: instances: %s", scene_name, sc_strerror(st));
+            run_free(&r);
+            return st;
+        }
+        if (log) fprintf(log, "  traced through %zu instances of %zu objects\n", instances->num_instances,
+                         instances->num_objects);
+    }
     float light[3];
     sc_light_point(lights, nlights, r.mesh.lo, r.mesh.hi, light);
     size_t first_row = out->count;
@@ -459,7 +520,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
                "primid_disagree,t_err_max,holes,sphere_tests_per_ray,sphere_reject_rate,"
                "false_positive_rate,tri_tests_per_ray,bytes_per_tri,"
                "nrays,closed,t_err_median,hole_rays,speed_vs_embree,grazes_missed,graze_rays,"
-               "best_embree,best_embree_tracer,embree_build,mxcsr,loops,build_s\n");
+               "best_embree,best_embree_tracer,embree_build,mxcsr,loops,build_s,instances\n");
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
         char a[32], b[32], c[32], d[32], e[32], g[32], h[32], be[32];
@@ -483,7 +544,7 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
         sc_csv_str(f, r->best_embree_tracer);
         fputc(',', f);
         sc_csv_str(f, r->embree_build);
-        fprintf(f, ",%s,%d,%.6g\n", r->ftz ? "ftz" : "default", r->loops, r->build_s);
+        fprintf(f, ",%s,%d,%.6g,%zu\n", r->ftz ? "ftz" : "default", r->loops, r->build_s, r->instances);
     }
     return ferror(f) ? -1 : 0;
 }
@@ -510,6 +571,7 @@ int sc_cmp_write_json(const sc_cmp_rows *rows, FILE *f)
             break;
         cJSON_AddStringToObject(o, "scene", r->scene);
         cJSON_AddNumberToObject(o, "triangles", r->triangles);
+        cJSON_AddNumberToObject(o, "instances", (double)r->instances);
         cJSON_AddBoolToObject(o, "closed", r->closed);
         cJSON_AddStringToObject(o, "rays", sc_rayset_kind_name(r->rays));
         cJSON_AddNumberToObject(o, "nrays", (double)r->nrays);
@@ -555,7 +617,10 @@ void sc_cmp_print_table(const sc_cmp_rows *rows, FILE *f)
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
         if (strcmp(r->scene, last_scene) != 0) {
-            fprintf(f, "\n%s: %u triangles, %s\n", r->scene, r->triangles, r->closed ? "closed" : "open");
+            fprintf(f, "\n%s: %u triangles, %s", r->scene, r->triangles, r->closed ? "closed" : "open");
+            if (r->instances)
+                fprintf(f, ", traced through %zu instances", r->instances);
+            fputc('\n', f);
             fprintf(f, "%-11s %-24s %3s %8s %7s %6s %6s %5s %5s %9s %9s %5s %6s %7s %6s %6s %7s %6s\n", "rays",
                     "tracer", "thr", "Mrays/s", "xEmbree", "xBest", "oracle", "h/m", "prim", "t_err_med", "t_err_max",
                     "holes", "grazes", "sph/ray", "rej%", "fp%", "tri/ray", "B/tri");

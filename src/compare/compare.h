@@ -29,6 +29,7 @@ typedef struct sc_cmp_options {
     int oracle_threads;
     double min_seconds;                 /* each timed repeat runs its set until this long (>= 0) */
     int ftz;                            /* 1: FTZ|DAZ in every timed thread, ours and Embree's */
+    int flatten;                        /* 1: trace a scene with instances as its flattened mesh */
     const char *embree_build;           /* the Embree in use ("3.13.5 /path"), copied to rows; may be NULL */
     /* Optional: called around every timed block of runs, with 1 before and 0
      * after (the MPI driver keeps the other ranks on the node quiet then);
@@ -42,6 +43,7 @@ void sc_cmp_options_default(sc_cmp_options *o);
 typedef struct sc_cmp_row {
     char scene[64];
     uint32_t triangles;
+    size_t instances;                   /* traced through this many instances (0: the flat mesh) */
     int closed;
     sc_rayset_kind rays;
     size_t nrays;
@@ -74,11 +76,15 @@ typedef struct sc_cmp_rows {
 void sc_cmp_rows_free(sc_cmp_rows *r);
 
 /* Runs everything for one scene and appends rows. The shadow rays go to
- * sc_light_point of the scene's lights (tracer.h). log (may be NULL) gets
- * progress lines. On error err holds one line. */
-sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_camera *camera,
-                       const sc_light *lights, size_t nlights, const sc_cmp_options *opt, sc_cmp_rows *out,
-                       FILE *log, char *err, size_t errlen);
+ * sc_light_point of the scene's lights (tracer.h). instances (may be NULL):
+ * a scene view with instances whose flattened mesh is `mesh`; then every
+ * tracer that can is built through the instances (sc_tracer_build_scene),
+ * the others are skipped, and the oracle decides each instance's rounded
+ * object-space ray (sc_oracle_run_scene). log (may be NULL) gets progress
+ * lines. On error err holds one line. */
+sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const sc_scene_view *instances,
+                       const sc_camera *camera, const sc_light *lights, size_t nlights, const sc_cmp_options *opt,
+                       sc_cmp_rows *out, FILE *log, char *err, size_t errlen);
 
 /* Output helpers (0 on success). */
 int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f);

@@ -309,32 +309,24 @@ out:
     return NULL;
 }
 
-sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t n, int threads,
-                        int flags, sc_oracle *out)
+/* rays[0..n) against a prepared mesh on `threads` threads into hits[0..n);
+ * the work counts are added to *out. */
+static sc_status run_prepared(const oracle_mesh *m, const sc_ray *rays, size_t n, int threads, int flags,
+                              sc_oracle_hit *hits, sc_oracle *out)
 {
-    if (!out)
-        return SC_ERR_INVALID_ARGUMENT;
-    memset(out, 0, sizeof *out);
-    if (!mesh || (n && !rays) || threads < 1 || threads > 256 ||
-        (flags & ~(SC_ORACLE_LATER_HIT | SC_ORACLE_CROSSING)))
-        return SC_ERR_INVALID_ARGUMENT;
-    sc_status st;
-    oracle_mesh m;
-    if ((st = mesh_prepare(mesh, &m)) != SC_OK) {
-        mesh_release(&m);
-        return st;
-    }
-    out->hits = malloc((n ? n : 1) * sizeof *out->hits);
+    if (n == 0)
+        return SC_OK;
+    if ((size_t)threads > n)
+        threads = (int)n;
     job *jobs = calloc((size_t)threads, sizeof *jobs);
     pthread_t *tid = calloc((size_t)threads, sizeof *tid);
     char *started = calloc((size_t)threads, 1);
-    if (!out->hits || !jobs || !tid || !started) {
-        free(jobs), free(tid), free(started), mesh_release(&m), sc_oracle_free(out);
+    if (!jobs || !tid || !started) {
+        free(jobs), free(tid), free(started);
         return SC_ERR_OUT_OF_MEMORY;
     }
-    out->count = n;
     for (int k = 0; k < threads; k++) {
-        jobs[k] = (job){ &m, rays, out->hits, n * (size_t)k / (size_t)threads,
+        jobs[k] = (job){ m, rays, hits, n * (size_t)k / (size_t)threads,
                          n * (size_t)(k + 1) / (size_t)threads, 0, 0, 0, flags };
         if (k > 0 && pthread_create(&tid[k], NULL, run_job, &jobs[k]) == 0)
             started[k] = 1;
@@ -352,12 +344,172 @@ sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t 
         out->candidates += jobs[k].candidates;
         out->exact_calls += jobs[k].exact_calls;
     }
-    free(jobs), free(tid), free(started), mesh_release(&m);
-    if (failed) {
-        sc_oracle_free(out);
+    free(jobs), free(tid), free(started);
+    return failed ? SC_ERR_OUT_OF_MEMORY : SC_OK;
+}
+
+static int bad_args(const sc_ray *rays, size_t n, int threads, int flags)
+{
+    return (n && !rays) || threads < 1 || threads > 256 || (flags & ~(SC_ORACLE_LATER_HIT | SC_ORACLE_CROSSING));
+}
+
+sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t n, int threads,
+                        int flags, sc_oracle *out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!mesh || bad_args(rays, n, threads, flags))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_status st;
+    oracle_mesh m;
+    if ((st = mesh_prepare(mesh, &m)) != SC_OK) {
+        mesh_release(&m);
+        return st;
+    }
+    out->hits = malloc((n ? n : 1) * sizeof *out->hits);
+    if (!out->hits) {
+        mesh_release(&m);
         return SC_ERR_OUT_OF_MEMORY;
     }
-    return SC_OK;
+    out->count = n;
+    st = run_prepared(&m, rays, n, threads, flags, out->hits, out);
+    mesh_release(&m);
+    if (st != SC_OK)
+        sc_oracle_free(out);
+    return st;
+}
+
+/* ---- through instances ----------------------------------------------------- */
+
+static void add_ids(uint32_t *set, uint32_t *count, const uint32_t *src, uint32_t src_count, const uint32_t *map,
+                    size_t offset)
+{
+    uint32_t ns = src_count < SC_ORACLE_MAX_TIES ? src_count : SC_ORACLE_MAX_TIES;
+    for (uint32_t k = 0; k < ns; k++) {
+        uint32_t id = map ? map[src[k]] : (uint32_t)(offset + src[k]);
+        if (*count < SC_ORACLE_MAX_TIES) {     /* ascending, like a single mesh's sets */
+            uint32_t b = *count;
+            for (; b > 0 && set[b - 1] > id; b--)
+                set[b] = set[b - 1];
+            set[b] = id;
+        }
+        (*count)++;
+    }
+    *count += src_count - ns;
+}
+
+/* Folds one mesh's answer for a ray into the scene's: the smallest exact t
+ * wins, equal t (as doubles) join the tie set; ids through map (own mesh)
+ * or plus offset (an instance's first triangle). */
+static void merge_hit(sc_oracle_hit *d, const sc_oracle_hit *s, const uint32_t *map, size_t offset)
+{
+    if (s->hit) {
+        if (!d->hit || s->t < d->t) {
+            d->crosses = s->crosses || d->hit;     /* the old first hit lies beyond */
+            d->hit = 1;
+            d->t = s->t;
+            d->first_kind = s->first_kind;
+            d->tie_count = 0;
+            add_ids(d->ties, &d->tie_count, s->ties, s->tie_count, map, offset);
+        } else if (s->t == d->t) {
+            d->crosses |= s->crosses;
+            if (s->first_kind != d->first_kind)
+                d->first_kind = s->first_kind == SC_CROSS_CROSS || d->first_kind == SC_CROSS_CROSS ? SC_CROSS_CROSS
+                                                                                                 : SC_CROSS_AMBIG;
+            add_ids(d->ties, &d->tie_count, s->ties, s->tie_count, map, offset);
+        } else {
+            d->crosses = 1;
+        }
+    }
+    if (s->cross_t < d->cross_t) {
+        d->cross_t = s->cross_t;
+        d->cross_tie_count = 0;
+        add_ids(d->cross_ties, &d->cross_tie_count, s->cross_ties, s->cross_tie_count, map, offset);
+    } else if (isfinite(s->cross_t) && s->cross_t == d->cross_t) {
+        add_ids(d->cross_ties, &d->cross_tie_count, s->cross_ties, s->cross_tie_count, map, offset);
+    }
+    d->coplanar += s->coplanar;
+}
+
+sc_status sc_oracle_run_scene(const sc_oracle_scene *sc, const sc_ray *rays, size_t n, int threads, int flags,
+                              sc_oracle *out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!sc || bad_args(rays, n, threads, flags) || (sc->own && !sc->own_prim) ||
+        (sc->num_objects && !sc->objects) || (sc->num_instances && (!sc->instances || !sc->object_ray)))
+        return SC_ERR_INVALID_ARGUMENT;
+    for (size_t i = 0; i < sc->num_instances; i++)
+        if (sc->instances[i].object >= sc->num_objects)
+            return SC_ERR_INVALID_ARGUMENT;
+    out->hits = malloc((n ? n : 1) * sizeof *out->hits);
+    sc_oracle_hit *part = malloc((n ? n : 1) * sizeof *part);
+    sc_ray *orays = malloc((n ? n : 1) * sizeof *orays);
+    size_t *idx = malloc((n ? n : 1) * sizeof *idx);
+    sc_status st = SC_ERR_OUT_OF_MEMORY;
+    if (!out->hits || !part || !orays || !idx)
+        goto done;
+    out->count = n;
+    for (size_t i = 0; i < n; i++) {
+        memset(&out->hits[i], 0, sizeof out->hits[i]);
+        out->hits[i].t = out->hits[i].cross_t = INFINITY;
+    }
+    st = SC_OK;
+    if (sc->own && sc->own->view.triangle_count) {
+        oracle_mesh m;
+        if ((st = mesh_prepare(sc->own, &m)) == SC_OK)
+            st = run_prepared(&m, rays, n, threads, flags, part, out);
+        mesh_release(&m);
+        for (size_t i = 0; st == SC_OK && i < n; i++)
+            merge_hit(&out->hits[i], &part[i], sc->own_prim, 0);
+    }
+    for (size_t k = 0; k < sc->num_objects && st == SC_OK; k++) {
+        const sc_checked_mesh *obj = &sc->objects[k];
+        if (!obj->view.triangle_count)
+            continue;
+        oracle_mesh m;
+        if ((st = mesh_prepare(obj, &m)) != SC_OK) {
+            mesh_release(&m);
+            break;
+        }
+        /* the object's box, padded as the cluster boxes are: an object ray
+         * that misses it misses every triangle */
+        double box[6];
+        for (int a = 0; a < 3; a++) {
+            double lo = obj->lo[a], hi = obj->hi[a];
+            double pad = 1e-7 * ((hi - lo) + fmax(fabs(lo), fabs(hi))) + 1e-300;
+            box[a] = lo - pad, box[3 + a] = hi + pad;
+        }
+        for (size_t i = 0; i < sc->num_instances && st == SC_OK; i++) {
+            if (sc->instances[i].object != k)
+                continue;
+            size_t ns = 0;
+            for (size_t r = 0; r < n; r++) {
+                sc_ray o;
+                if (sc->object_ray(sc->ctx, i, &rays[r], &o) != SC_OK) {
+                    st = SC_ERR_INVALID_ARGUMENT;
+                    break;
+                }
+                const double O[3] = { o.org[0], o.org[1], o.org[2] }, D[3] = { o.dir[0], o.dir[1], o.dir[2] };
+                if (box_may_hit(box, O, D, o.tmin, o.tmax)) {
+                    idx[ns] = r;
+                    orays[ns++] = o;
+                }
+            }
+            if (st == SC_OK)
+                st = run_prepared(&m, orays, ns, threads, flags, part, out);
+            for (size_t q = 0; st == SC_OK && q < ns; q++)
+                merge_hit(&out->hits[idx[q]], &part[q], NULL, sc->instances[i].first_triangle);
+        }
+        mesh_release(&m);
+    }
+done:
+    free(part), free(orays), free(idx);
+    if (st != SC_OK)
+        sc_oracle_free(out);
+    return st;
 }
 
 void sc_oracle_free(sc_oracle *o)

@@ -20,6 +20,7 @@
 #include <stdint.h>
 
 #include "spherecull/sc_rays.h"
+#include "spherecull/sc_scene.h"
 
 enum { SC_ORACLE_MAX_TIES = 32 };
 
@@ -56,6 +57,30 @@ enum { SC_ORACLE_LATER_HIT = 1, SC_ORACLE_CROSSING = 2 };
  * for bad arguments. */
 sc_status sc_oracle_run(const sc_checked_mesh *mesh, const sc_ray *rays, size_t n, int threads,
                         int flags, sc_oracle *out);
+
+/* A scene with instances (sc_scene.h): the triangles no instance owns, in
+ * world space (own, may be NULL; its triangle k is reported as own_prim[k]),
+ * and the instances of objects, whose triangle t is reported as the
+ * instance's first_triangle + t. object_ray gives instance i's object-space
+ * ray for a world ray: the rounded ray a tracer through instances promises
+ * the exact first hit of (sc_accel.h), so the oracle decides that ray
+ * exactly, triangle by triangle in the object, and the scene's first hit
+ * is the smallest exact t over the meshes. t equal as doubles across
+ * meshes counts as a tie. */
+typedef struct sc_oracle_scene {
+    const sc_checked_mesh *own;
+    const uint32_t *own_prim;
+    const sc_checked_mesh *objects;
+    size_t num_objects;
+    const sc_scene_instance *instances;
+    size_t num_instances;
+    sc_status (*object_ray)(void *ctx, size_t inst, const sc_ray *world, sc_ray *object);
+    void *ctx;
+} sc_oracle_scene;
+
+/* sc_oracle_run through instances; the same flags and results, ids as above. */
+sc_status sc_oracle_run_scene(const sc_oracle_scene *scene, const sc_ray *rays, size_t n, int threads, int flags,
+                              sc_oracle *out);
 void sc_oracle_free(sc_oracle *o);
 
 /* 1 iff prim is in ray i's tie set (also when the set overflowed and prim

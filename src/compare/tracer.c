@@ -92,6 +92,16 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
 }
 
 static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm);
+static sc_status tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *v);
+
+sc_status sc_tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *v)
+{
+    double t0 = sc_now_seconds();
+    sc_status st = tracer_build_scene(t, def, v);
+    if (st == SC_OK)
+        t->build_seconds = sc_now_seconds() - t0;
+    return st;
+}
 
 sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm)
 {
@@ -147,22 +157,143 @@ static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_c
 #endif
 }
 
+/* Embree through instances: hit (inst, prim) back to view->mesh. */
+typedef struct embree_map {
+    const sc_scene_instance *instances;
+    size_t num_instances;
+    uint32_t *own_prim;     /* own triangle k is view->mesh triangle own_prim[k] */
+    size_t num_own;
+} embree_map;
+
+static void embree_map_free(embree_map *m)
+{
+    if (m)
+        free(m->own_prim);
+    free(m);
+}
+
+static sc_status tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *v)
+{
+    if (!t || !def || !v || (v->num_instances && (!v->instances || !v->objects)))
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(t, 0, sizeof *t);
+    t->def = *def;
+    t->instanced = 1;
+    const size_t nt = v->mesh.triangle_count;
+    if (def->family == SC_TRACER_OURS) {
+        if (def->packet == 8 || def->packet == 16)
+            return SC_ERR_UNSUPPORTED;
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.prefilter = (sc_prefilter_mode)def->mode;
+        cfg.tri_test = (sc_tri_test)def->quality;
+        cfg.threads = 0;
+        sc_scene_accel *a;
+        sc_status st = sc_scene_accel_build(v, &cfg, &a);
+        if (st != SC_OK)
+            return st;
+        size_t bytes = 0;
+        sc_scene_accel_info(a, NULL, &bytes, NULL);
+        t->handle = a;
+        t->bytes_per_tri = nt ? (double)bytes / nt : 0;
+        t->prefilter = cfg.prefilter != SC_PREFILTER_OFF;
+        t->counted = 1;
+        t->fp_exact = cfg.prefilter == SC_PREFILTER_CIRCUM || cfg.prefilter == SC_PREFILTER_MINIMAL ||
+                      cfg.prefilter == SC_PREFILTER_COMPACT;
+        return SC_OK;
+    }
+#ifdef SC_HAVE_EMBREE
+    /* Embree's packets are the yardstick of ours, which have no instanced
+     * path; and Embree 3.13.5's rtcOccluded16 through instances did not
+     * return on orchard.json's shadow rays (docs/scenes.md) */
+    if ((def->mode != SC_EMBREE_DEFAULT && def->mode != SC_EMBREE_ROBUST && def->mode != SC_EMBREE_COMPACT) ||
+        def->packet == 8 || def->packet == 16)
+        return SC_ERR_UNSUPPORTED;
+    sc_status st = SC_ERR_OUT_OF_MEMORY;
+    embree_map *map = calloc(1, sizeof *map);
+    uint32_t *own_idx = NULL;
+    float *own_pos = NULL;
+    sc_checked_mesh *objs = calloc(v->num_objects ? v->num_objects : 1, sizeof *objs);
+    sc_embree_instance *inst = malloc((v->num_instances ? v->num_instances : 1) * sizeof *inst);
+    sc_embree *e = NULL;
+    if (!map || !objs || !inst ||
+        (st = sc_scene_view_own_triangles(v, &own_idx, &map->own_prim, &map->num_own)) != SC_OK)
+        goto done;
+    map->instances = v->instances, map->num_instances = v->num_instances;
+    for (size_t i = 0; i < v->num_instances; i++) {
+        inst[i].object = v->instances[i].object;
+        memcpy(inst[i].xfm, v->instances[i].xfm, sizeof inst[i].xfm);
+    }
+    for (size_t k = 0; k < v->num_objects; k++)
+        if ((st = sc_mesh_check(&v->objects[k], &objs[k])) != SC_OK)
+            goto done;
+    /* the own triangles with only their vertices: Embree copies every
+     * vertex of a geometry's buffer */
+    sc_checked_mesh own;
+    if (map->num_own) {
+        uint32_t *remap = malloc((v->mesh.vertex_count ? v->mesh.vertex_count : 1) * sizeof *remap);
+        own_pos = malloc(9 * sizeof(float) * map->num_own);
+        st = SC_ERR_OUT_OF_MEMORY;
+        if (!remap || !own_pos) {
+            free(remap);
+            goto done;
+        }
+        memset(remap, 0xff, v->mesh.vertex_count * sizeof *remap);
+        uint32_t nv = 0;
+        for (size_t k = 0; k < 3 * map->num_own; k++) {
+            uint32_t *x = &own_idx[k];
+            if (remap[*x] == UINT32_MAX) {
+                memcpy(own_pos + 3 * (size_t)nv, sc_mesh_vertex(&v->mesh, *x), 3 * sizeof(float));
+                remap[*x] = nv++;
+            }
+            *x = remap[*x];
+        }
+        free(remap);
+        const sc_mesh_view own_view = { own_pos, nv, own_idx, map->num_own, 0, 0 };
+        if ((st = sc_mesh_check(&own_view, &own)) != SC_OK)
+            goto done;
+    }
+    sc_embree_config cfg;
+    sc_embree_config_default(&cfg);
+    cfg.mode = (sc_embree_mode)def->mode;
+    cfg.quality = (sc_embree_quality)def->quality;
+    if ((st = sc_embree_create_instanced(map->num_own ? &own : NULL, objs, v->num_objects, inst, v->num_instances, &cfg, &e)) != SC_OK)
+        goto done;
+    sc_embree_info info;
+    sc_embree_get_info(e, &info);
+    t->handle = e;
+    t->aux = map;
+    map = NULL;
+    t->bytes_per_tri = nt ? (double)info.embree_bytes / nt : 0;
+done:
+    embree_map_free(map);
+    free(own_idx), free(own_pos), free(objs), free(inst);
+    return st;
+#else
+    return SC_ERR_UNSUPPORTED;
+#endif
+}
+
 void sc_tracer_free(sc_tracer *t)
 {
     if (!t || !t->handle)
         return;
-    if (t->def.family == SC_TRACER_OURS)
+    if (t->def.family == SC_TRACER_OURS && t->instanced)
+        sc_scene_accel_free(t->handle);
+    else if (t->def.family == SC_TRACER_OURS)
         sc_bvh_free(t->handle);
 #ifdef SC_HAVE_EMBREE
     else
         sc_embree_destroy(t->handle);
 #endif
+    embree_map_free(t->aux);
     t->handle = NULL;
+    t->aux = NULL;
 }
 
 const sc_bvh *sc_tracer_bvh(const sc_tracer *t)
 {
-    return t && t->def.family == SC_TRACER_OURS ? t->handle : NULL;
+    return t && t->def.family == SC_TRACER_OURS && !t->instanced ? t->handle : NULL;
 }
 
 void sc_tracer_counters_add(sc_tracer_counters *to, const sc_tracer_counters *c)
@@ -251,6 +382,16 @@ static sc_status ours_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc_h
         memset(&ts, 0, sizeof ts);
         tsp = &ts;
     }
+    if (t->instanced) {
+        sc_status st = occ ? sc_scene_accel_any(t->handle, rays, n, occ, tsp)
+                           : sc_scene_accel_closest(t->handle, rays, n, hits, tsp);
+        if (st == SC_OK && ctr) {
+            sc_tracer_counters c = { n, ts.nodes, ts.leaves, ts.sphere_tests, ts.sphere_rejects, ts.tri_tests,
+                                     ts.tri_hits, t->fp_exact ? ts.tri_tests - ts.tri_hits : 0 };
+            sc_tracer_counters_add(ctr, &c);
+        }
+        return st;
+    }
     if (t->def.packet == SC_TRACER_STREAM || t->def.packet == 8 || t->def.packet == 16) {
         sc_status st;
         if (t->def.packet != SC_TRACER_STREAM) {
@@ -318,6 +459,17 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
         st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, ecp);
     else
         st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
+    const embree_map *map = t->aux;
+    if (map && !occ)
+        for (size_t i = 0; i < n; i++) {
+            sc_hitrec *h = &hits[i];
+            if (h->prim == SC_HITREC_MISS)
+                continue;
+            h->prim = h->inst != SC_INVALID_ID ? (uint32_t)(map->instances[h->inst].first_triangle + h->prim)
+                                               : map->own_prim[h->prim];
+            h->geom = 0;
+            h->inst = SC_INVALID_ID;
+        }
     if (st == SC_OK && ctr) {
         sc_tracer_counters c = { n, 0, 0, ec.sphere_tests, ec.sphere_rejects, ec.tri_tests, ec.tri_hits,
                                  ec.false_positives };

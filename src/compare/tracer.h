@@ -50,6 +50,8 @@ typedef struct sc_tracer {
     int ftz;                 /* sc_tracer_run_threads sets MXCSR flush-to-zero and
                               * denormals-are-zero in every thread it runs this tracer
                               * on (and restores it): Embree asks for it; set by the caller */
+    int instanced;           /* built by sc_tracer_build_scene through instances */
+    void *aux;               /* Embree through instances: the map back to flat triangles */
 } sc_tracer;
 
 /* The named tracers of this build, in table order (NULL-terminated). */
@@ -58,6 +60,14 @@ const sc_tracer_def *sc_tracer_find(const char *name);
 
 /* Builds a table tracer. */
 sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *mesh);
+/* A table tracer over a scene with instances, traced through them: ours
+ * through sc_scene_accel (sc_render.h), Embree through instances of one
+ * scene per object (sc_embree_create_instanced); the triangles no instance
+ * owns form one mesh beside them. Hits come back as view->mesh indices,
+ * like the flat tracers'. SC_ERR_UNSUPPORTED for the tracers without an
+ * instanced path (8/16 packets, ours and so Embree's; Embree's user
+ * geometry). */
+sc_status sc_tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *view);
 /* Our BVH with any configuration (bench sweeps leaf size, ISA, ...). */
 sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,
                               const sc_checked_mesh *mesh);

@@ -33,6 +33,10 @@ struct sc_embree {
     uint32_t *prim;             /* nclusters * width original ids */
     uint8_t *count;             /* triangles per cluster */
     float (*box)[6];            /* per cluster lo, hi */
+    /* sc_embree_create_instanced: instances are geometries 0..n-1 of the
+     * top scene, its own mesh geometry n (reported as geom 0) */
+    int instanced;
+    uint32_t num_instances;
 };
 
 /* The context passed through Embree to our callbacks: Embree hands the
@@ -385,6 +389,72 @@ static sc_status check_config(const sc_embree_config *cfg)
     return SC_OK;
 }
 
+/* A native triangle geometry holding Embree's own copies of the mesh, so
+ * the memory monitor counts what a user of Embree pays; NULL when out of
+ * memory. Not committed. */
+static RTCGeometry triangle_geometry(RTCDevice dev, const sc_mesh_view *mesh)
+{
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!g)
+        return NULL;
+    float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                        mesh->vertex_count);
+    unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                           mesh->triangle_count);
+    if (!vb || !ib) {
+        rtcReleaseGeometry(g);
+        return NULL;
+    }
+    for (size_t i = 0; i < mesh->vertex_count; i++)
+        memcpy(vb + 3 * i, sc_mesh_vertex(mesh, i), 3 * sizeof(float));
+    for (size_t t = 0; t < mesh->triangle_count; t++)
+        memcpy(ib + 3 * t, sc_mesh_triangle(mesh, t), 3 * sizeof(unsigned));
+    return g;
+}
+
+static enum RTCSceneFlags scene_flags(sc_embree_mode mode)
+{
+    /* The drop-in needs Embree's conservative box tests too: a ray through
+     * a vertex on a cluster box's face is otherwise culled before our
+     * watertight test runs (measured: vertex rays through closed meshes). */
+    return mode == SC_EMBREE_DEFAULT ? RTC_SCENE_FLAG_NONE
+           : mode == SC_EMBREE_COMPACT ? RTC_SCENE_FLAG_COMPACT
+                                       : RTC_SCENE_FLAG_ROBUST;
+}
+
+static enum RTCBuildQuality build_quality(sc_embree_quality q)
+{
+    return q == SC_EMBREE_QUALITY_HIGH ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
+}
+
+/* A device as the config asks, with our error and memory callbacks. */
+static sc_status new_device(sc_embree *e)
+{
+    char config[64] = "verbose=0";
+    if (e->cfg.build_threads > 0)
+        snprintf(config, sizeof config, "verbose=0,threads=%d", e->cfg.build_threads);
+    e->device = rtcNewDevice(config);
+    if (!e->device)
+        return rtcGetDeviceError(NULL) == RTC_ERROR_UNSUPPORTED_CPU ? SC_ERR_UNSUPPORTED : SC_ERR_OUT_OF_MEMORY;
+    rtcSetDeviceErrorFunction(e->device, error_function, e);
+    rtcSetDeviceMemoryMonitorFunction(e->device, memory_monitor, e);
+    return SC_OK;
+}
+
+/* After the commit: Embree's errors, and what it holds. */
+static sc_status finish_create(sc_embree *e, sc_embree **out)
+{
+    if (e->device_error || rtcGetDeviceError(e->device) != RTC_ERROR_NONE) {
+        int code = e->device_error;
+        sc_embree_destroy(e);
+        return code == RTC_ERROR_OUT_OF_MEMORY ? SC_ERR_OUT_OF_MEMORY : SC_ERR_UNSUPPORTED;
+    }
+    e->info.embree_bytes = (size_t)(atomic_load(&e->mem_now) > 0 ? atomic_load(&e->mem_now) : 0);
+    e->info.embree_peak_bytes = (size_t)(atomic_load(&e->mem_peak) > 0 ? atomic_load(&e->mem_peak) : 0);
+    *out = e;
+    return SC_OK;
+}
+
 sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_config *cfg,
                            sc_embree **out)
 {
@@ -402,44 +472,20 @@ sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_confi
         return SC_ERR_OUT_OF_MEMORY;
     e->cfg = *cfg;
     e->info.triangles = mesh->triangle_count;
-    char config[64] = "verbose=0";
-    if (cfg->build_threads > 0)
-        snprintf(config, sizeof config, "verbose=0,threads=%d", cfg->build_threads);
-    e->device = rtcNewDevice(config);
-    if (!e->device) {
-        free(e);
-        return rtcGetDeviceError(NULL) == RTC_ERROR_UNSUPPORTED_CPU ? SC_ERR_UNSUPPORTED
-                                                                    : SC_ERR_OUT_OF_MEMORY;
+    if ((st = new_device(e)) != SC_OK) {
+        sc_embree_destroy(e);
+        return st;
     }
-    rtcSetDeviceErrorFunction(e->device, error_function, e);
-    rtcSetDeviceMemoryMonitorFunction(e->device, memory_monitor, e);
     e->scene = rtcNewScene(e->device);
-    rtcSetSceneBuildQuality(e->scene, cfg->quality == SC_EMBREE_QUALITY_HIGH ? RTC_BUILD_QUALITY_HIGH
-                                                                             : RTC_BUILD_QUALITY_MEDIUM);
-    /* The drop-in needs Embree's conservative box tests too: a ray through
-     * a vertex on a cluster box's face is otherwise culled before our
-     * watertight test runs (measured: vertex rays through closed meshes). */
-    rtcSetSceneFlags(e->scene, cfg->mode == SC_EMBREE_DEFAULT   ? RTC_SCENE_FLAG_NONE
-                               : cfg->mode == SC_EMBREE_COMPACT ? RTC_SCENE_FLAG_COMPACT
-                                                                : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(e->scene, build_quality(cfg->quality));
+    rtcSetSceneFlags(e->scene, scene_flags(cfg->mode));
 
     RTCGeometry g;
     if (cfg->mode == SC_EMBREE_DEFAULT || cfg->mode == SC_EMBREE_ROBUST || cfg->mode == SC_EMBREE_COMPACT) {
-        g = rtcNewGeometry(e->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        /* Embree's own copies, so the monitor counts what a user of Embree pays. */
-        float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                            3 * sizeof(float), mesh->vertex_count);
-        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                               3 * sizeof(unsigned), mesh->triangle_count);
-        if (!vb || !ib) {
-            rtcReleaseGeometry(g);
+        if (!(g = triangle_geometry(e->device, mesh))) {
             sc_embree_destroy(e);
             return SC_ERR_OUT_OF_MEMORY;
         }
-        for (size_t i = 0; i < mesh->vertex_count; i++)
-            memcpy(vb + 3 * i, sc_mesh_vertex(mesh, i), 3 * sizeof(float));
-        for (size_t t = 0; t < mesh->triangle_count; t++)
-            memcpy(ib + 3 * t, sc_mesh_triangle(mesh, t), 3 * sizeof(unsigned));
     } else {
         if ((st = build_clusters(e, checked)) != SC_OK) {
             sc_embree_destroy(e);
@@ -453,21 +499,101 @@ sc_status sc_embree_create(const sc_checked_mesh *checked, const sc_embree_confi
         /* the Debian build aborts on rtcOccluded1 without one */
         rtcSetGeometryOccludedFunction(g, occluded_cb);
     }
-    rtcSetGeometryBuildQuality(g, cfg->quality == SC_EMBREE_QUALITY_HIGH ? RTC_BUILD_QUALITY_HIGH
-                                                                         : RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetGeometryBuildQuality(g, build_quality(cfg->quality));
     rtcCommitGeometry(g);
     rtcAttachGeometry(e->scene, g);
     rtcReleaseGeometry(g);
     rtcCommitScene(e->scene);
-    if (e->device_error || rtcGetDeviceError(e->device) != RTC_ERROR_NONE) {
-        int code = e->device_error;
+    return finish_create(e, out);
+}
+
+sc_status sc_embree_create_instanced(const sc_checked_mesh *own, const sc_checked_mesh *objects, size_t num_objects,
+                                     const sc_embree_instance *instances, size_t num_instances,
+                                     const sc_embree_config *cfg, sc_embree **out)
+{
+    if (!out)
+        return SC_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!cfg || (num_objects && !objects) || (num_instances && !instances) || num_instances >= RTC_INVALID_GEOMETRY_ID)
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_status st = check_config(cfg);
+    if (st != SC_OK)
+        return st;
+    if (cfg->mode != SC_EMBREE_DEFAULT && cfg->mode != SC_EMBREE_ROBUST && cfg->mode != SC_EMBREE_COMPACT)
+        return SC_ERR_UNSUPPORTED;
+    for (size_t i = 0; i < num_instances; i++)
+        if (instances[i].object >= num_objects)
+            return SC_ERR_INVALID_ARGUMENT;
+    sc_embree *e = calloc(1, sizeof *e);
+    if (!e)
+        return SC_ERR_OUT_OF_MEMORY;
+    e->cfg = *cfg;
+    e->instanced = 1;
+    e->num_instances = (uint32_t)num_instances;
+    size_t tris = own ? own->view.triangle_count : 0;
+    for (size_t i = 0; i < num_instances; i++)
+        tris += objects[instances[i].object].view.triangle_count;
+    e->info.triangles = tris > UINT32_MAX ? UINT32_MAX : (uint32_t)tris;
+    RTCScene *obj = calloc(num_objects ? num_objects : 1, sizeof *obj);
+    if (!obj || (st = new_device(e)) != SC_OK) {
+        free(obj);
         sc_embree_destroy(e);
-        return code == RTC_ERROR_OUT_OF_MEMORY ? SC_ERR_OUT_OF_MEMORY : SC_ERR_UNSUPPORTED;
+        return obj ? st : SC_ERR_OUT_OF_MEMORY;
     }
-    e->info.embree_bytes = (size_t)(atomic_load(&e->mem_now) > 0 ? atomic_load(&e->mem_now) : 0);
-    e->info.embree_peak_bytes = (size_t)(atomic_load(&e->mem_peak) > 0 ? atomic_load(&e->mem_peak) : 0);
-    *out = e;
-    return SC_OK;
+    st = SC_OK;
+    /* One scene per object, as an Embree user builds them; the instances
+     * take ids 0..n-1 in the top scene, so Embree's instID is our inst. */
+    for (size_t k = 0; k < num_objects && st == SC_OK; k++) {
+        obj[k] = rtcNewScene(e->device);
+        rtcSetSceneBuildQuality(obj[k], build_quality(cfg->quality));
+        rtcSetSceneFlags(obj[k], scene_flags(cfg->mode));
+        RTCGeometry g = triangle_geometry(e->device, &objects[k].view);
+        if (!g) {
+            st = SC_ERR_OUT_OF_MEMORY;
+            break;
+        }
+        rtcSetGeometryBuildQuality(g, build_quality(cfg->quality));
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(obj[k], g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(obj[k]);
+    }
+    if (st == SC_OK) {
+        e->scene = rtcNewScene(e->device);
+        rtcSetSceneBuildQuality(e->scene, build_quality(cfg->quality));
+        rtcSetSceneFlags(e->scene, scene_flags(cfg->mode));
+        for (size_t i = 0; i < num_instances; i++) {
+            RTCGeometry g = rtcNewGeometry(e->device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(g, obj[instances[i].object]);
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, instances[i].xfm);
+            rtcCommitGeometry(g);
+            rtcAttachGeometryByID(e->scene, g, (unsigned)i);
+            rtcReleaseGeometry(g);
+        }
+        if (own && own->view.triangle_count) {
+            RTCGeometry g = triangle_geometry(e->device, &own->view);
+            if (!g) {
+                st = SC_ERR_OUT_OF_MEMORY;
+            } else {
+                rtcSetGeometryBuildQuality(g, build_quality(cfg->quality));
+                rtcCommitGeometry(g);
+                rtcAttachGeometryByID(e->scene, g, (unsigned)num_instances);
+                rtcReleaseGeometry(g);
+            }
+        }
+        if (st == SC_OK)
+            rtcCommitScene(e->scene);
+    }
+    /* the top scene holds its own references to the object scenes */
+    for (size_t k = 0; k < num_objects; k++)
+        if (obj[k])
+            rtcReleaseScene(obj[k]);
+    free(obj);
+    if (st != SC_OK) {
+        sc_embree_destroy(e);
+        return st;
+    }
+    return finish_create(e, out);
 }
 
 void sc_embree_destroy(sc_embree *e)
@@ -516,6 +642,14 @@ static void hit_miss(sc_hitrec *h)
     h->geom = h->inst = SC_INVALID_ID;
 }
 
+/* Embree's ids as sc_embree.h reports them: an instanced scene's own mesh
+ * is geometry n of the top scene, reported as geom 0. */
+static inline void set_ids(const sc_embree *e, sc_hitrec *h, unsigned geom, unsigned inst)
+{
+    h->inst = inst;
+    h->geom = e->instanced && inst == RTC_INVALID_GEOMETRY_ID ? geom - e->num_instances : geom;
+}
+
 sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hitrec *hits,
                                sc_embree_counters *ctr)
 {
@@ -536,7 +670,7 @@ sc_status sc_embree_intersect1(sc_embree *e, const sc_ray *rays, size_t n, sc_hi
             hits[i].t = rh.ray.tfar, hits[i].u = rh.hit.u, hits[i].v = rh.hit.v;
             hits[i].prim = rh.hit.primID;
             hits[i].ng[0] = rh.hit.Ng_x, hits[i].ng[1] = rh.hit.Ng_y, hits[i].ng[2] = rh.hit.Ng_z;
-            hits[i].geom = rh.hit.geomID, hits[i].inst = rh.hit.instID[0];
+            set_ids(e, &hits[i], rh.hit.geomID, rh.hit.instID[0]);
         }
     }
     if (ctr)
@@ -589,7 +723,7 @@ sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_
                 h->prim = rh.hit.primID[i];                                              \
                 h->ng[0] = rh.hit.Ng_x[i], h->ng[1] = rh.hit.Ng_y[i];                    \
                 h->ng[2] = rh.hit.Ng_z[i];                                               \
-                h->geom = rh.hit.geomID[i], h->inst = rh.hit.instID[0][i];               \
+                set_ids(e, h, rh.hit.geomID[i], rh.hit.instID[0][i]);                   \
             }                                                                            \
         }                                                                                \
     }
@@ -677,7 +811,7 @@ sc_status sc_embree_intersect_stream(sc_embree *e, const sc_ray *rays, size_t n,
             } else {
                 h->t = rh[i].ray.tfar, h->u = rh[i].hit.u, h->v = rh[i].hit.v, h->prim = rh[i].hit.primID;
                 h->ng[0] = rh[i].hit.Ng_x, h->ng[1] = rh[i].hit.Ng_y, h->ng[2] = rh[i].hit.Ng_z;
-                h->geom = rh[i].hit.geomID, h->inst = rh[i].hit.instID[0];
+                set_ids(e, h, rh[i].hit.geomID, rh[i].hit.instID[0]);
             }
         }
     }

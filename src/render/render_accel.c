@@ -15,7 +15,9 @@ struct sc_scene_accel {
     sc_accel *world;
     uint32_t *own_idx;           /* the triangles no instance owns, 3 indices each */
     uint32_t *own_prim;          /* their index in view->mesh */
+    size_t num_own;
     const sc_scene_instance *instances;
+    size_t num_instances;
     double build_seconds;
 };
 
@@ -32,26 +34,62 @@ void sc_scene_accel_free(sc_scene_accel *a)
     free(a);
 }
 
+static int instances_fit(const sc_scene_view *v)
+{
+    const size_t nt = v->mesh.triangle_count;
+    for (size_t i = 0; i < v->num_instances; i++)
+        if (v->instances[i].object >= v->num_objects || v->instances[i].first_triangle > nt ||
+            v->objects[v->instances[i].object].triangle_count > nt - v->instances[i].first_triangle)
+            return 0;
+    return 1;
+}
+
+sc_status sc_scene_view_own_triangles(const sc_scene_view *v, uint32_t **indices, uint32_t **prims, size_t *count)
+{
+    if (!indices || !prims || !count)
+        return SC_ERR_INVALID_ARGUMENT;
+    *indices = *prims = NULL;
+    *count = 0;
+    if (!v || (v->num_instances && (!v->instances || !v->objects)) || !instances_fit(v))
+        return SC_ERR_INVALID_ARGUMENT;
+    const size_t nt = v->mesh.triangle_count;
+    unsigned char *owned = calloc(nt ? nt : 1, 1);
+    if (!owned)
+        return SC_ERR_OUT_OF_MEMORY;
+    for (size_t i = 0; i < v->num_instances; i++)
+        memset(owned + v->instances[i].first_triangle, 1, v->objects[v->instances[i].object].triangle_count);
+    size_t n = 0;
+    for (size_t t = 0; t < nt; t++)
+        n += !owned[t];
+    uint32_t *idx = malloc(12 * (n ? n : 1)), *prim = malloc(4 * (n ? n : 1));
+    if (!idx || !prim) {
+        free(owned), free(idx), free(prim);
+        return SC_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t t = 0, k = 0; t < nt; t++)
+        if (!owned[t]) {
+            memcpy(idx + 3 * k, sc_mesh_triangle(&v->mesh, t), 12);
+            prim[k++] = (uint32_t)t;
+        }
+    free(owned);
+    *indices = idx, *prims = prim, *count = n;
+    return SC_OK;
+}
+
 sc_status sc_scene_accel_build(const sc_scene_view *v, const sc_bvh_config *cfg, sc_scene_accel **out)
 {
     if (!out)
         return SC_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    if (!v || (v->num_instances && (!v->instances || !v->objects)))
+    if (!v || (v->num_instances && (!v->instances || !v->objects)) || !instances_fit(v))
         return SC_ERR_INVALID_ARGUMENT;
-    const size_t nt = v->mesh.triangle_count;
-    for (size_t i = 0; i < v->num_instances; i++)
-        if (v->instances[i].object >= v->num_objects ||
-            v->instances[i].first_triangle > nt ||
-            v->objects[v->instances[i].object].triangle_count > nt - v->instances[i].first_triangle)
-            return SC_ERR_INVALID_ARGUMENT;
     const double t0 = sc_now_seconds();
     sc_scene_accel *a = calloc(1, sizeof *a);
-    unsigned char *owned = calloc(nt ? nt : 1, 1);
     sc_status st = SC_ERR_OUT_OF_MEMORY;
-    if (!a || !owned)
+    if (!a)
         goto fail;
     a->instances = v->instances;
+    a->num_instances = v->num_instances;
     a->objects = calloc(v->num_objects ? v->num_objects : 1, sizeof *a->objects);
     if (!a->objects)
         goto fail;
@@ -63,25 +101,12 @@ sc_status sc_scene_accel_build(const sc_scene_view *v, const sc_bvh_config *cfg,
             (st = sc_accel_commit(a->objects[i])) != SC_OK)
             goto fail;
     }
-    for (size_t i = 0; i < v->num_instances; i++)
-        memset(owned + v->instances[i].first_triangle, 1, v->objects[v->instances[i].object].triangle_count);
-    size_t n_own = 0;
-    for (size_t t = 0; t < nt; t++)
-        n_own += !owned[t];
-    a->own_idx = malloc(12 * (n_own ? n_own : 1));
-    a->own_prim = malloc(4 * (n_own ? n_own : 1));
-    st = SC_ERR_OUT_OF_MEMORY;
-    if (!a->own_idx || !a->own_prim)
+    if ((st = sc_scene_view_own_triangles(v, &a->own_idx, &a->own_prim, &a->num_own)) != SC_OK ||
+        (st = sc_accel_new(cfg, &a->world)) != SC_OK)
         goto fail;
-    for (size_t t = 0, k = 0; t < nt; t++)
-        if (!owned[t]) {
-            memcpy(a->own_idx + 3 * k, sc_mesh_triangle(&v->mesh, t), 12);
-            a->own_prim[k++] = (uint32_t)t;
-        }
-    if ((st = sc_accel_new(cfg, &a->world)) != SC_OK)
-        goto fail;
-    if (n_own) {
-        const sc_mesh_view own = { v->mesh.positions, v->mesh.vertex_count, a->own_idx, n_own, v->mesh.vertex_stride, 0 };
+    if (a->num_own) {
+        const sc_mesh_view own = { v->mesh.positions, v->mesh.vertex_count, a->own_idx, a->num_own,
+                                   v->mesh.vertex_stride, 0 };
         if ((st = sc_accel_attach_mesh(a->world, &own, SC_ACCEL_SHARED, NULL)) != SC_OK)
             goto fail;
     }
@@ -92,23 +117,24 @@ sc_status sc_scene_accel_build(const sc_scene_view *v, const sc_bvh_config *cfg,
     if ((st = sc_accel_commit(a->world)) != SC_OK)
         goto fail;
     a->build_seconds = sc_now_seconds() - t0;
-    free(owned);
     *out = a;
     return SC_OK;
 fail:
-    free(owned);
     sc_scene_accel_free(a);
     return st;
 }
 
-static sc_status closest(void *ctx, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent)
+sc_status sc_scene_accel_closest(const sc_scene_accel *a, const sc_ray *rays, size_t n, sc_hitrec *hits,
+                                 sc_trace_stats *stats)
 {
-    (void)coherent;
-    const sc_scene_accel *a = ctx;
-    sc_status st = sc_accel_closest_n(a->world, rays, sizeof *rays, hits, sizeof *hits, n, 0, NULL);
+    if (!a || (n && (!rays || !hits)))
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_status st = sc_accel_closest_n(a->world, rays, sizeof *rays, hits, sizeof *hits, n, 0, stats);
     for (size_t i = 0; i < n; i++) {
         sc_hitrec *h = &hits[i];
-        if (h->prim == SC_HITREC_MISS)
+        /* a refused ray's entry is the caller's: mapped only if it can be */
+        if (h->prim == SC_HITREC_MISS || (h->inst != SC_INVALID_ID ? h->inst >= a->num_instances
+                                                                   : h->prim >= a->num_own))
             continue;
         h->prim = h->inst != SC_INVALID_ID ? (uint32_t)(a->instances[h->inst].first_triangle + h->prim)
                                            : a->own_prim[h->prim];
@@ -118,23 +144,41 @@ static sc_status closest(void *ctx, const sc_ray *rays, size_t n, sc_hitrec *hit
     return st;
 }
 
-static sc_status occluded(void *ctx, const sc_ray *rays, size_t n, uint8_t *occ, int coherent)
+sc_status sc_scene_accel_any(const sc_scene_accel *a, const sc_ray *rays, size_t n, uint8_t *occ,
+                             sc_trace_stats *stats)
 {
-    (void)coherent;
-    const sc_scene_accel *a = ctx;
+    if (!a || (n && (!rays || !occ)))
+        return SC_ERR_INVALID_ARGUMENT;
     int32_t buf[256];
     sc_status st = SC_OK;
     for (size_t i = 0; i < n; i += 256) {
         const size_t m = n - i < 256 ? n - i : 256;
         for (size_t j = 0; j < m; j++)
             buf[j] = occ[i + j];   /* a refused ray keeps what the caller put, as render.c's own */
-        sc_status s = sc_accel_any_n(a->world, rays + i, sizeof *rays, buf, sizeof *buf, m, 0, NULL);
+        sc_status s = sc_accel_any_n(a->world, rays + i, sizeof *rays, buf, sizeof *buf, m, 0, stats);
         if (s != SC_OK)
             st = s;
         for (size_t j = 0; j < m; j++)
             occ[i + j] = buf[j] != 0;
     }
     return st;
+}
+
+const sc_accel *sc_scene_accel_world(const sc_scene_accel *a)
+{
+    return a ? a->world : NULL;
+}
+
+static sc_status closest(void *ctx, const sc_ray *rays, size_t n, sc_hitrec *hits, int coherent)
+{
+    (void)coherent;
+    return sc_scene_accel_closest(ctx, rays, n, hits, NULL);
+}
+
+static sc_status occluded(void *ctx, const sc_ray *rays, size_t n, uint8_t *occ, int coherent)
+{
+    (void)coherent;
+    return sc_scene_accel_any(ctx, rays, n, occ, NULL);
 }
 
 void sc_scene_accel_backend(sc_scene_accel *a, sc_render_backend *out)
