@@ -109,6 +109,7 @@ if "$S" compare --help | grep -q 'embree-high'; then
              exit bad
            }' y.csv > y.out || no "compare yardstick columns: $(cat y.out)"
 fi
+"$S" bench 'a,b.obj' --instances many > /dev/null 2>&1; [ $? -eq 2 ] || no "bench --instances many: not a usage error"
 "$S" compare 'a,b.obj' --instances many > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --instances many: not a usage error"
 # a scene with instances is compared through them (the instances column),
 # or flattened on request
@@ -124,6 +125,11 @@ for mode in trace flat; do
        { n++; if ($c["instances"] != want || $c["hit_miss_disagree"] != 0 || $c["primid_disagree"] != 0) bad = 1 }
        END { exit bad || n != 1 }' i.csv || no "compare --instances $mode: $(cat i.csv)"
 done
+"$S" bench inst.json --repeats 1 --threads 1 --leaf 8 --prefilter off --size 16x16 --count 64 > b.out 2>&1 ||
+  no "bench inst.json: exit status $?"
+grep -q 'traced through 2 instances' b.out || no "bench inst.json: not through the instances: $(cat b.out)"
+"$S" bench inst.json --packet 16 --repeats 1 --threads 1 --leaf 8 --prefilter off --size 16x16 --count 64 2> b.out >/dev/null
+[ $? -eq 1 ] && [ "$(grep -c . b.out)" -eq 1 ] || no "bench --packet 16 through instances: not one error line: $(cat b.out)"
 "$S" compare 'a,b.obj' --mxcsr fast > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --mxcsr fast: not a usage error"
 "$S" compare 'a,b.obj' --min-time -1 > /dev/null 2>&1; [ $? -eq 2 ] || no "compare --min-time -1: not a usage error"
 

@@ -4,7 +4,8 @@
  * the triangle the exact oracle names (as a view->mesh index); the exact
  * test agrees with the oracle on every ray, adversarial ones included; and
  * a comparison run through the instances finds no disagreement, hole or
- * graze for spherecull-exact. */
+ * graze for spherecull-exact; bench's brute-force check passes through
+ * the instances. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -14,6 +15,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "compare/bench.h"
 #include "compare/compare.h"
 #include "compare/oracle.h"
 #include "compare/tracer.h"
@@ -226,11 +228,75 @@ static void test_compare_through_instances(void **state)
     teardown(&f);
 }
 
+typedef struct bench_seen {
+    size_t scenes, rows, instances;
+} bench_seen;
+
+static void seen_scene(void *ctx, const sc_bench_scene *s)
+{
+    bench_seen *b = ctx;
+    b->scenes++;
+    b->instances = s->instances;
+}
+
+static void seen_row(void *ctx, const sc_bench_row *r)
+{
+    bench_seen *b = ctx;
+    b->rows++;
+    assert_int_equal(r->diff_brute, 0);
+    assert_true(r->mrays > 0);
+}
+
+/* bench through instances: each configuration's hits pass the brute-force
+ * check through the instances (a difference is an error), every ray kind
+ * and prefilter mode is measured, packets are refused with one line, and
+ * --instances flat benchmarks the flattened mesh. */
+static void test_bench_through_instances(void **state)
+{
+    (void)state;
+    fixture f;
+    setup(&f);
+    sc_bench_options o;
+    sc_bench_options_default(&o);
+    o.kinds[0] = SC_RAYS_PRIMARY, o.kinds[1] = SC_RAYS_SHADOW, o.kinds[2] = SC_RAYS_DIFFUSE;
+    o.kinds[3] = SC_RAYS_RANDOM, o.nkinds = 4;
+    o.threads[0] = 1, o.nthreads = 1;
+    o.leaves[0] = 4, o.nleaves = 1;
+    o.modes[0] = SC_PREFILTER_OFF, o.modes[1] = SC_PREFILTER_COMPACT, o.nmodes = 2;
+    o.width = 64, o.height = 48, o.repeats = 1, o.count = 2000;
+    char err[256] = "";
+    for (int tri = 0; tri < 2; tri++) {
+        o.tri = tri ? SC_TRI_EXACT : SC_TRI_WATERTIGHT;
+        bench_seen b = { 0 };
+        const sc_bench_sink sink = { seen_scene, seen_row, &b };
+        assert_int_equal(sc_bench_run(&f.v.mesh, &f.v, &f.v.camera, f.v.lights, f.v.num_lights, &o, -1, &sink, err,
+                                      sizeof err),
+                         SC_OK);
+        assert_int_equal(b.scenes, 1);
+        assert_int_equal(b.instances, 11);
+        assert_int_equal(b.rows, 4 * 2);
+    }
+    o.packet = 16;
+    bench_seen b = { 0 };
+    const sc_bench_sink sink = { seen_scene, seen_row, &b };
+    assert_int_equal(sc_bench_run(&f.v.mesh, &f.v, &f.v.camera, f.v.lights, f.v.num_lights, &o, -1, &sink, err,
+                                  sizeof err),
+                     SC_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err, "instances"));
+    o.flatten = 1;
+    assert_int_equal(sc_bench_run(&f.v.mesh, &f.v, &f.v.camera, f.v.lights, f.v.num_lights, &o, -1, &sink, err,
+                                  sizeof err),
+                     SC_OK);
+    assert_int_equal(b.instances, 0);
+    teardown(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tracers_through_instances),
         cmocka_unit_test(test_compare_through_instances),
+        cmocka_unit_test(test_bench_through_instances),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -35,7 +35,7 @@ static char embree_build[128];
 static const sc_name embree_modes[] = { { "default", 0 }, { "robust", 1 } };
 
 enum { O_CSV, O_RAYS, O_THREADS, O_LEAF, O_PREFILTER, O_SIZE, O_REPEATS, O_ISA, O_EMBREE, O_TRIANGLE, O_TRAV,
-       O_PACKET, O_COUNT };
+       O_PACKET, O_COUNT, O_INSTANCES };
 static const sc_cli_opt opts[] = {
     [O_CSV] = { "csv", 0, "FILE", "also write one row per measurement", NULL },
     [O_RAYS] = { "rays", 0, "LIST", "primary,shadow,diffuse,random", "primary,shadow" },
@@ -52,6 +52,8 @@ static const sc_cli_opt opts[] = {
     [O_PACKET] = { "packet", 0, "W", "0: single rays; 8 or 16: packets of consecutive rays (4x4 pixel tiles), "
                    "against Embree's packets of the same width", "0" },
     [O_COUNT] = { "count", 0, "N", "random rays per scene", "65536" },
+    [O_INSTANCES] = { "instances", 0, "MODE", "a scene with instances: 'trace' through them (both tracers; "
+                                              "single rays only) or 'flat' (its flattened mesh)", "trace" },
 };
 
 typedef struct args {
@@ -148,6 +150,10 @@ static int on_option(void *ctx, int opt, const char *val)
         bad = v != 0 && v != 8 && v != 16;
         o->packet = (int)v;
         break;
+    case O_INSTANCES:
+        bad = strcmp(val, "trace") != 0 && strcmp(val, "flat") != 0;
+        o->flatten = strcmp(val, "flat") == 0;
+        break;
     case O_TRAV: {
         char *end;
         double c = strtod(val, &end);
@@ -177,15 +183,21 @@ static void print_scene(void *ctx, const sc_bench_scene *s)
     printer *p = ctx;
     p->scene = *s;
     const sc_camera *cam = &s->camera;
+    if (s->instances)
+        printf("\n## %s: traced through %zu instances (both tracers)", p->spec, s->instances);
     printf("\n## %s: %zu triangles, bounds (%.4g %.4g %.4g)..(%.4g %.4g %.4g)\n", p->spec, s->triangles, s->lo[0],
            s->lo[1], s->lo[2], s->hi[0], s->hi[1], s->hi[2]);
     printf("#  eye (%.4g %.4g %.4g) target (%.4g %.4g %.4g) fov %.1f, light (%.4g %.4g %.4g)\n", cam->eye[0],
            cam->eye[1], cam->eye[2], cam->target[0], cam->target[1], cam->target[2], cam->fov_y_deg, s->light[0],
            s->light[1], s->light[2]);
     printf("#  %zu primary rays (%zu hit), %zu shadow rays (%zu blocked), %zu diffuse rays (%zu hit),\n"
-           "#  %zu random rays (%zu hit); embree BVH %.1f B/tri (+%.1f for its copy of the mesh)\n", s->primary,
-           s->primary_hits, s->shadow, s->shadow_blocked, s->diffuse, s->diffuse_hits, s->random, s->random_hits,
-           s->embree_bvh_bpt, s->embree_bpt - s->embree_bvh_bpt);
+           "#  %zu random rays (%zu hit); ", s->primary, s->primary_hits, s->shadow, s->shadow_blocked, s->diffuse,
+           s->diffuse_hits, s->random, s->random_hits);
+    if (s->instances)   /* Embree holds each object once, its copies included */
+        printf("embree %.2f B per flattened triangle in all\n", s->embree_bpt);
+    else
+        printf("embree BVH %.1f B/tri (+%.1f for its copy of the mesh)\n", s->embree_bvh_bpt,
+               s->embree_bpt - s->embree_bvh_bpt);
     printf("%-7s %3s %4s %-8s %6s %5s %8s %8s %6s %6s | %6s %6s %6s %6s %6s %5s %8s %6s\n", "rays", "thr", "leaf",
            "prefilt", "B/tri", "sph%", "Mrays/s", "embree", "ratio", "cyc-r", "nodes", "leaves", "sph", "rej%",
            "tris", "hits", "build-ms", "diff");
@@ -199,7 +211,7 @@ static void print_row(void *ctx, const sc_bench_row *r)
     const double n = w->rays ? (double)w->rays : 1;
     const double rej = w->sphere_tests ? (double)w->sphere_rejects / (double)w->sphere_tests : 0.0;
     const char *kind = sc_rayset_kind_name(r->kind), *mode = sc_prefilter_mode_name(r->prefilter);
-    printf("%-7s %3d %4d %-8s %6.1f %5.1f %8.2f %8.2f %6.3f %6.3f | %6.2f %6.3f %6.2f %6.1f %6.2f %5.3f %8.1f %6zu\n",
+    printf("%-7s %3d %4d %-8s %6.2f %5.1f %8.2f %8.2f %6.3f %6.3f | %6.2f %6.3f %6.2f %6.1f %6.2f %5.3f %8.1f %6zu\n",
            kind, r->threads, r->leaf, mode, r->bytes_per_tri, r->sphere_leaf_pct, r->mrays, r->embree_mrays, r->ratio,
            r->cycle_ratio, (double)w->nodes / n, (double)w->leaves / n, (double)w->sphere_tests / n, 100.0 * rej,
            (double)w->tri_tests / n, (double)w->tri_hits / n, r->build_ms, r->diff_embree);
@@ -235,7 +247,7 @@ static int bench_scene(const char *spec, const sc_bench_options *o, int cycles_f
     char err[512] = "";
     printer p = { spec, o, csv, { 0 } };
     sc_bench_sink sink = { print_scene, print_row, &p };
-    sc_status st = sc_bench_run(&mesh, &v.camera, v.lights, v.num_lights, o, cycles_fd, &sink, err, sizeof err);
+    sc_status st = sc_bench_run(&mesh, &v, &v.camera, v.lights, v.num_lights, o, cycles_fd, &sink, err, sizeof err);
     sc_scene_free(scene);
     if (st != SC_OK) {
         sc_cli_error(CMD, "%s: %s", spec, err[0] ? err : sc_strerror(st));
@@ -336,7 +348,7 @@ static int bench_distributed(sc_mpi *mpi, const args *a, int cycles_fd, FILE *cs
         o.leaves[0] = a->o.leaves[li];
         o.modes[0] = a->o.modes[mi];
         c.item = item;
-        st = sc_bench_run(&mesh, &v.camera, v.lights, v.num_lights, &o, cycles_fd, &sink, err, sizeof err);
+        st = sc_bench_run(&mesh, &v, &v.camera, v.lights, v.num_lights, &o, cycles_fd, &sink, err, sizeof err);
         if (st == SC_OK && c.oom)
             st = SC_ERR_OUT_OF_MEMORY;
         if (st != SC_OK)

@@ -63,6 +63,15 @@ typedef struct bench_ctx {
     uint8_t *emb_occ;                      /* and for the shadow rays */
     char *err;
     size_t errlen;
+    /* Through instances (NULL: the flat mesh): the view, the object-space
+     * rays (accel), and for the brute-force check one tree per object and
+     * one over the rest, built with the benchmark's triangle test */
+    const sc_scene_view *iv;
+    sc_scene_accel *accel;
+    sc_bvh **obj_bvh, *own_bvh;
+    double (*obj_box)[6];
+    uint32_t *own_idx, *own_prim;
+    size_t num_own;
 } bench_ctx;
 
 static sc_status run(const sc_tracer *t, sc_rayset_kind kind, const sc_rayset *rs, bench_ctx *c, int threads,
@@ -119,7 +128,8 @@ static sc_status make_rays(bench_ctx *c, const sc_camera *camera, const sc_light
     sc_bvh_config cfg;
     sc_bvh_config_default(&cfg);
     sc_tracer ref;
-    if ((st = sc_tracer_build_bvh(&ref, "reference", &cfg, &c->mesh)) != SC_OK) {
+    if ((st = c->iv ? sc_tracer_build_scene_bvh(&ref, "reference", &cfg, c->iv)
+                    : sc_tracer_build_bvh(&ref, "reference", &cfg, &c->mesh)) != SC_OK) {
         snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
         return st;
     }
@@ -159,7 +169,7 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
         pdef.packet = c->o->packet;
         def = &pdef;
     }
-    sc_status st = sc_tracer_build(&c->emb, def, &c->mesh);
+    sc_status st = c->iv ? sc_tracer_build_scene(&c->emb, def, c->iv) : sc_tracer_build(&c->emb, def, &c->mesh);
     if (st != SC_OK) {
         snprintf(c->err, c->errlen, "Embree: %s", sc_strerror(st));
         return st;
@@ -169,7 +179,8 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
      * comparable figure is Embree's BVH alone. Both are reported. */
     double ntri = (double)c->mesh.view.triangle_count;
     sc->embree_bpt = c->emb.bytes_per_tri;
-    sc->embree_bvh_bpt = sc->embree_bpt - 12.0 * (double)c->mesh.view.vertex_count / ntri - 12.0;
+    /* through instances Embree holds each object once: no flat copy to take off */
+    sc->embree_bvh_bpt = c->iv ? NAN : sc->embree_bpt - 12.0 * (double)c->mesh.view.vertex_count / ntri - 12.0;
     for (int k = 0; k < SC_BENCH_KINDS; k++) {
         const sc_rayset *rs = &c->sets[k];
         if (!wanted(c->o, (sc_rayset_kind)k))
@@ -187,6 +198,101 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
     return SC_OK;
 }
 
+/* The object's box padded (as the oracle pads its boxes) for the
+ * brute-force check's instance skip; a slab test in double that errs
+ * towards keeping the instance. */
+static int box_may_hit(const double *b, const sc_ray *r)
+{
+    double tn = r->tmin, tf = r->tmax;
+    for (int a = 0; a < 3; a++) {
+        const double o = r->org[a], d = r->dir[a];
+        if (d == 0) {
+            if (o < b[a] || o > b[3 + a])
+                return 0;
+            continue;
+        }
+        double t1 = (b[a] - o) / d, t2 = (b[3 + a] - o) / d;
+        if (t1 > t2) {
+            const double x = t1;
+            t1 = t2, t2 = x;
+        }
+        tn = t1 > tn ? t1 : tn;
+        tf = t2 < tf ? t2 : tf;
+    }
+    return tn <= tf + 1e-9 * (fabs(tn) + fabs(tf));
+}
+
+/* Brute force through instances: every triangle of every instance whose
+ * box the object ray may hit, with the same rounded object ray and the same
+ * triangle test as the tracer; the first hit over them, as a view->mesh
+ * index. */
+static void brute_scene(const bench_ctx *c, const sc_ray *r, sc_hitrec *best)
+{
+    best->prim = SC_HITREC_MISS;
+    best->t = INFINITY;
+    sc_hitrec h;
+    if (c->own_bvh) {
+        sc_trace_closest_brute(c->own_bvh, r, &h);
+        if (h.prim != SC_HITREC_MISS)
+            *best = h, best->prim = c->own_prim[h.prim];
+    }
+    const sc_accel *world = sc_scene_accel_world(c->accel);
+    for (size_t i = 0; i < c->iv->num_instances; i++) {
+        const sc_scene_instance *in = &c->iv->instances[i];
+        sc_ray o;
+        if (sc_accel_instance_ray(world, (uint32_t)i, r, &o) != SC_OK || !box_may_hit(c->obj_box[in->object], &o))
+            continue;
+        sc_trace_closest_brute(c->obj_bvh[in->object], &o, &h);
+        if (h.prim != SC_HITREC_MISS && (best->prim == SC_HITREC_MISS || h.t < best->t))
+            *best = h, best->prim = (uint32_t)(in->first_triangle + h.prim);
+    }
+}
+
+/* What brute_scene needs, built once: the tests' answers do not depend on
+ * the leaf size or the prefilter, only on the triangle test. */
+static sc_status prepare_instances(bench_ctx *c)
+{
+    const sc_scene_view *v = c->iv;
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.tri_test = c->o->tri;
+    cfg.prefilter = SC_PREFILTER_OFF;
+    sc_status st;
+    if ((st = sc_scene_accel_build(v, &cfg, &c->accel)) != SC_OK ||
+        (st = sc_scene_view_own_triangles(v, &c->own_idx, &c->own_prim, &c->num_own)) != SC_OK)
+        return st;
+    if (c->num_own) {
+        const sc_mesh_view own = { v->mesh.positions, v->mesh.vertex_count, c->own_idx, c->num_own,
+                                   v->mesh.vertex_stride, 0 };
+        if ((st = sc_bvh_build(&own, &cfg, &c->own_bvh)) != SC_OK)
+            return st;
+    }
+    c->obj_bvh = calloc(v->num_objects ? v->num_objects : 1, sizeof *c->obj_bvh);
+    c->obj_box = calloc(v->num_objects ? v->num_objects : 1, sizeof *c->obj_box);
+    if (!c->obj_bvh || !c->obj_box)
+        return SC_ERR_OUT_OF_MEMORY;
+    for (size_t k = 0; k < v->num_objects; k++) {
+        float lo[3], hi[3];
+        if ((st = sc_bvh_build(&v->objects[k], &cfg, &c->obj_bvh[k])) != SC_OK ||
+            (st = sc_mesh_bounds(&v->objects[k], lo, hi)) != SC_OK)
+            return st;
+        for (int a = 0; a < 3; a++) {
+            const double pad = 1e-6 * ((double)hi[a] - lo[a] + fmax(fabs(lo[a]), fabs(hi[a]))) + 1e-300;
+            c->obj_box[k][a] = lo[a] - pad, c->obj_box[k][3 + a] = hi[a] + pad;
+        }
+    }
+    return SC_OK;
+}
+
+static void release_instances(bench_ctx *c)
+{
+    sc_scene_accel_free(c->accel);
+    sc_bvh_free(c->own_bvh);
+    for (size_t k = 0; c->obj_bvh && k < c->iv->num_objects; k++)
+        sc_bvh_free(c->obj_bvh[k]);
+    free(c->obj_bvh), free(c->obj_box), free(c->own_idx), free(c->own_prim);
+}
+
 /* Hits of one configuration against brute force (a sample; same
  * arithmetic, so only exact ties may differ) and against Embree (all). */
 static void check(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, const sc_rayset *rs, sc_bench_row *r)
@@ -199,7 +305,10 @@ static void check(bench_ctx *c, const sc_tracer *t, sc_rayset_kind kind, const s
     r->diff_brute = r->diff_embree = 0;
     for (size_t i = 0; i < n; i += step) {
         sc_hitrec h;
-        sc_trace_closest_brute(sc_tracer_bvh(t), &rs->rays[i], &h);
+        if (c->iv)
+            brute_scene(c, &rs->rays[i], &h);
+        else
+            sc_trace_closest_brute(sc_tracer_bvh(t), &rs->rays[i], &h);
         if (!any ? !sc_same_hit(&c->hits[i], &h, 0.0f) : c->occ[i] != (h.prim != SC_HITREC_MISS))
             r->diff_brute++;
     }
@@ -264,14 +373,19 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
     if (o->trav_cost >= 0)
         cfg.traversal_cost = o->trav_cost;
     sc_tracer t;
-    sc_status st = sc_tracer_build_bvh(&t, sc_prefilter_mode_name(cfg.prefilter), &cfg, &c->mesh);
+    sc_status st = c->iv ? sc_tracer_build_scene_bvh(&t, sc_prefilter_mode_name(cfg.prefilter), &cfg, c->iv)
+                         : sc_tracer_build_bvh(&t, sc_prefilter_mode_name(cfg.prefilter), &cfg, &c->mesh);
     if (st != SC_OK) {
         snprintf(c->err, c->errlen, "BVH build: %s", sc_strerror(st));
         return st;
     }
     t.def.packet = o->packet;
     sc_bvh_info info;
-    sc_bvh_get_info(sc_tracer_bvh(&t), &info);
+    memset(&info, 0, sizeof info);
+    if (c->iv)
+        info.build_seconds = t.build_seconds;     /* objects, rest and top level; no leaf census */
+    else
+        sc_bvh_get_info(sc_tracer_bvh(&t), &info);
     sc_bench_row r;
     memset(&r, 0, sizeof r);
     r.leaf = cfg.leaf_size, r.prefilter = cfg.prefilter, r.isa = sc_isa_active();
@@ -302,9 +416,9 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
     return st;
 }
 
-sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const sc_light *lights,
-                       size_t nlights, const sc_bench_options *o, int cycles_fd, const sc_bench_sink *sink,
-                       char *err, size_t errlen)
+sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_scene_view *instances, const sc_camera *camera,
+                       const sc_light *lights, size_t nlights, const sc_bench_options *o, int cycles_fd,
+                       const sc_bench_sink *sink, char *err, size_t errlen)
 {
     char dummy[8];
     if (!err || !errlen)
@@ -325,7 +439,22 @@ sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const 
     c.o = o, c.cycles_fd = cycles_fd, c.err = err, c.errlen = errlen;
     sc_bench_scene sc;
     memset(&sc, 0, sizeof sc);
-    sc_status st = make_rays(&c, camera, lights, nlights, &sc);
+    sc_status st = SC_OK;
+    if (instances && instances->num_instances && !o->flatten) {
+        if (o->packet) {
+            snprintf(err, errlen, "packets do not trace through instances (--instances flat, or --packet 0)");
+            return SC_ERR_UNSUPPORTED;
+        }
+        c.iv = instances;
+        sc.instances = instances->num_instances;
+        if ((st = prepare_instances(&c)) != SC_OK) {
+            snprintf(err, errlen, "instances: %s", sc_strerror(st));
+            release_instances(&c);
+            return st;
+        }
+    }
+    if (st == SC_OK)
+        st = make_rays(&c, camera, lights, nlights, &sc);
     if (st == SC_OK)
         st = make_embree(&c, &sc);
     if (st == SC_OK && sink && sink->scene)
@@ -334,6 +463,8 @@ sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const 
         for (int mi = 0; mi < o->nmodes && st == SC_OK; mi++)
             st = run_config(&c, o->leaves[li], o->modes[mi], sink);
     sc_tracer_free(&c.emb);
+    if (c.iv)
+        release_instances(&c);
     free(c.hits), free(c.occ), free(c.emb_occ);
     for (int k = 0; k < SC_BENCH_KINDS; k++) {
         free(c.emb_hits[k]);

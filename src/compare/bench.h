@@ -31,6 +31,7 @@ typedef struct sc_bench_options {
     float trav_cost;                               /* < 0: the builder's default */
     sc_tri_test tri;
     int packet;                                    /* 0: single rays; 8, 16: packets (Embree's too) */
+    int flatten;                                   /* 1: a scene with instances as its flattened mesh */
     /* Optional: called around every timed block (1 before, 0 after), as
      * sc_cmp_options.timing; NULL: nothing. */
     void (*timing)(void *ctx, int begin);
@@ -42,6 +43,7 @@ void sc_bench_options_default(sc_bench_options *o);
 /* What one scene's rays are. */
 typedef struct sc_bench_scene {
     size_t triangles;
+    size_t instances;                    /* traced through this many (0: the flat mesh) */
     float lo[3], hi[3], light[3];
     sc_camera camera;
     size_t primary, primary_hits, shadow, shadow_blocked, diffuse, diffuse_hits, random, random_hits;
@@ -74,9 +76,13 @@ typedef struct sc_bench_sink {
 int sc_bench_cycles_open(void);
 
 /* Runs the benchmark on one mesh; rows go to sink as they are measured.
- * cycles_fd: sc_bench_cycles_open's or -1. On error err holds one line. */
-sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_camera *camera, const sc_light *lights,
-                       size_t nlights, const sc_bench_options *o, int cycles_fd, const sc_bench_sink *sink,
-                       char *err, size_t errlen);
+ * instances (may be NULL): a scene view with instances whose flattened
+ * mesh is `mesh`: unless o->flatten, both tracers run through the instances
+ * (sc_tracer_build_scene), the brute-force check runs every instance's
+ * object ray through its object, and packets are refused. cycles_fd:
+ * sc_bench_cycles_open's or -1. On error err holds one line. */
+sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_scene_view *instances, const sc_camera *camera,
+                       const sc_light *lights, size_t nlights, const sc_bench_options *o, int cycles_fd,
+                       const sc_bench_sink *sink, char *err, size_t errlen);
 
 #endif

@@ -92,6 +92,31 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
 }
 
 static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm);
+sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,
+                                     const sc_scene_view *v)
+{
+    if (!t || !cfg || !v)
+        return SC_ERR_INVALID_ARGUMENT;
+    memset(t, 0, sizeof *t);
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0 };
+    t->instanced = 1;
+    sc_scene_accel *a;
+    sc_status st = sc_scene_accel_build(v, cfg, &a);
+    if (st != SC_OK)
+        return st;
+    size_t bytes = 0;
+    double secs = 0;
+    sc_scene_accel_info(a, NULL, &bytes, &secs);
+    t->handle = a;
+    t->build_seconds = secs;
+    t->bytes_per_tri = v->mesh.triangle_count ? (double)bytes / v->mesh.triangle_count : 0;
+    t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
+    t->counted = 1;
+    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL ||
+                  cfg->prefilter == SC_PREFILTER_COMPACT;
+    return SC_OK;
+}
+
 static sc_status tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *v);
 
 sc_status sc_tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *v)
@@ -188,19 +213,9 @@ static sc_status tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, cons
         cfg.prefilter = (sc_prefilter_mode)def->mode;
         cfg.tri_test = (sc_tri_test)def->quality;
         cfg.threads = 0;
-        sc_scene_accel *a;
-        sc_status st = sc_scene_accel_build(v, &cfg, &a);
-        if (st != SC_OK)
-            return st;
-        size_t bytes = 0;
-        sc_scene_accel_info(a, NULL, &bytes, NULL);
-        t->handle = a;
-        t->bytes_per_tri = nt ? (double)bytes / nt : 0;
-        t->prefilter = cfg.prefilter != SC_PREFILTER_OFF;
-        t->counted = 1;
-        t->fp_exact = cfg.prefilter == SC_PREFILTER_CIRCUM || cfg.prefilter == SC_PREFILTER_MINIMAL ||
-                      cfg.prefilter == SC_PREFILTER_COMPACT;
-        return SC_OK;
+        sc_status st = sc_tracer_build_scene_bvh(t, def->name, &cfg, v);
+        t->def.packet = def->packet;
+        return st;
     }
 #ifdef SC_HAVE_EMBREE
     /* Embree's packets are the yardstick of ours, which have no instanced
@@ -270,6 +285,7 @@ done:
     free(own_idx), free(own_pos), free(objs), free(inst);
     return st;
 #else
+    (void)nt;
     return SC_ERR_UNSUPPORTED;
 #endif
 }

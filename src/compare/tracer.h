@@ -68,6 +68,9 @@ sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_check
  * instanced path (8/16 packets, ours and so Embree's; Embree's user
  * geometry). */
 sc_status sc_tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *view);
+/* Ours through the instances with any configuration (bench's sweep). */
+sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,
+                                    const sc_scene_view *view);
 /* Our BVH with any configuration (bench sweeps leaf size, ISA, ...). */
 sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,
                               const sc_checked_mesh *mesh);
