@@ -243,6 +243,16 @@ int sc_cli_double(const char *cmd, const char *opt, const char *s, double lo, do
     return 0;
 }
 
+int sc_cli_choice(const char *cmd, const char *opt, const char *s, const char *a, const char *b, int *out)
+{
+    if (s && strcmp(s, a) == 0)
+        return *out = 0, 0;
+    if (s && strcmp(s, b) == 0)
+        return *out = 1, 0;
+    sc_cli_error(cmd, "--%s: '%s' is not %s or %s", opt, s ? s : "", a, b);
+    return -1;
+}
+
 int sc_cli_vec3(const char *cmd, const char *opt, const char *s, double lim, double out[3])
 {
     const char *p = s ? s : "";

@@ -105,6 +105,8 @@ int sc_cli_u64(const char *cmd, const char *opt, const char *s, unsigned long lo
 /* A finite number in [lo, hi]; "X,Y,Z", three finite numbers of magnitude at most lim. */
 int sc_cli_double(const char *cmd, const char *opt, const char *s, double lo, double hi, double *out);
 int sc_cli_vec3(const char *cmd, const char *opt, const char *s, double lim, double out[3]);
+/* One of two words: *out = 0 for a, 1 for b. */
+int sc_cli_choice(const char *cmd, const char *opt, const char *s, const char *a, const char *b, int *out);
 /* A comma list of integers in [lo, hi], at most max; returns the count or -1. */
 int sc_cli_int_list(const char *cmd, const char *opt, const char *s, int lo, int hi, int *out, int max);
 

@@ -151,9 +151,7 @@ static int on_option(void *ctx, int opt, const char *val)
         o->packet = (int)v;
         break;
     case O_INSTANCES:
-        bad = strcmp(val, "trace") != 0 && strcmp(val, "flat") != 0;
-        o->flatten = strcmp(val, "flat") == 0;
-        break;
+        return sc_cli_choice(CMD, opts[opt].name, val, "trace", "flat", &o->flatten) ? 2 : 0;
     case O_TRAV: {
         char *end;
         double c = strtod(val, &end);

@@ -143,12 +143,7 @@ static int on_option(void *ctx, int opt, const char *val)
         return 0;
     }
     case O_MXCSR:
-        if (strcmp(val, "ftz") != 0 && strcmp(val, "default") != 0) {
-            sc_cli_error(CMD, "--mxcsr: '%s' is not ftz or default", val);
-            return 2;
-        }
-        a->opt.ftz = strcmp(val, "ftz") == 0;
-        return 0;
+        return sc_cli_choice(CMD, opts[opt].name, val, "default", "ftz", &a->opt.ftz) ? 2 : 0;
     case O_WIDTH:
         if (sc_cli_int(CMD, opts[opt].name, val, 1, 8192, &v) != 0)
             return 2;
@@ -168,12 +163,7 @@ static int on_option(void *ctx, int opt, const char *val)
     case O_JSON: a->json = val; return 0;
     case O_PLOT: a->plot = val; return 0;
     case O_INSTANCES:
-        if (strcmp(val, "trace") != 0 && strcmp(val, "flat") != 0) {
-            sc_cli_error(CMD, "--instances: '%s' is not trace or flat", val);
-            return 2;
-        }
-        a->opt.flatten = strcmp(val, "flat") == 0;
-        return 0;
+        return sc_cli_choice(CMD, opts[opt].name, val, "trace", "flat", &a->opt.flatten) ? 2 : 0;
     }
     return 0;
 }

@@ -66,6 +66,21 @@ const sc_tracer_def *sc_tracer_find(const char *name)
     return NULL;
 }
 
+/* What every build of ours records. */
+static void ours_built(sc_tracer *t, void *handle, double seconds, size_t bytes, size_t triangles,
+                       const sc_bvh_config *cfg)
+{
+    t->handle = handle;
+    t->build_seconds = seconds;
+    t->bytes_per_tri = triangles ? (double)bytes / (double)triangles : 0;
+    t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
+    t->counted = 1;
+    /* auto mixes leaves with and without spheres: the counters cannot tell
+     * which triangle tests followed a passed sphere */
+    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL ||
+                  cfg->prefilter == SC_PREFILTER_COMPACT;
+}
+
 sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg, const sc_checked_mesh *cm)
 {
     if (!t || !cfg || !cm)
@@ -79,19 +94,12 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
         return st;
     sc_bvh_info info;
     sc_bvh_get_info(b, &info);
-    t->handle = b;
-    t->build_seconds = info.build_seconds;
-    t->bytes_per_tri = m->triangle_count ? (double)info.total_bytes / m->triangle_count : 0;
-    t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
-    t->counted = 1;
-    /* auto mixes leaves with and without spheres: the counters cannot tell
-     * which triangle tests followed a passed sphere */
-    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL ||
-                  cfg->prefilter == SC_PREFILTER_COMPACT;
+    ours_built(t, b, info.build_seconds, info.total_bytes, m->triangle_count, cfg);
     return SC_OK;
 }
 
 static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_checked_mesh *cm);
+
 sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,
                                      const sc_scene_view *v)
 {
@@ -107,13 +115,7 @@ sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh
     size_t bytes = 0;
     double secs = 0;
     sc_scene_accel_info(a, NULL, &bytes, &secs);
-    t->handle = a;
-    t->build_seconds = secs;
-    t->bytes_per_tri = v->mesh.triangle_count ? (double)bytes / v->mesh.triangle_count : 0;
-    t->prefilter = cfg->prefilter != SC_PREFILTER_OFF;
-    t->counted = 1;
-    t->fp_exact = cfg->prefilter == SC_PREFILTER_CIRCUM || cfg->prefilter == SC_PREFILTER_MINIMAL ||
-                  cfg->prefilter == SC_PREFILTER_COMPACT;
+    ours_built(t, a, secs, bytes, v->mesh.triangle_count, cfg);
     return SC_OK;
 }
 
