@@ -12,6 +12,7 @@
 #include "bench.h"
 #include "common/sc_clock.h"
 #include "spherecull/sc_trace.h"
+#include "tri_filter.h"
 
 enum { BRUTE_SAMPLE = 64 };
 
@@ -198,30 +199,6 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
     return SC_OK;
 }
 
-/* The object's box padded (as the oracle pads its boxes) for the
- * brute-force check's instance skip; a slab test in double that errs
- * towards keeping the instance. */
-static int box_may_hit(const double *b, const sc_ray *r)
-{
-    double tn = r->tmin, tf = r->tmax;
-    for (int a = 0; a < 3; a++) {
-        const double o = r->org[a], d = r->dir[a];
-        if (d == 0) {
-            if (o < b[a] || o > b[3 + a])
-                return 0;
-            continue;
-        }
-        double t1 = (b[a] - o) / d, t2 = (b[3 + a] - o) / d;
-        if (t1 > t2) {
-            const double x = t1;
-            t1 = t2, t2 = x;
-        }
-        tn = t1 > tn ? t1 : tn;
-        tf = t2 < tf ? t2 : tf;
-    }
-    return tn <= tf + 1e-9 * (fabs(tn) + fabs(tf));
-}
-
 /* Brute force through instances: every triangle of every instance whose
  * box the object ray may hit, with the same rounded object ray and the same
  * triangle test as the tracer; the first hit over them, as a view->mesh
@@ -240,7 +217,10 @@ static void brute_scene(const bench_ctx *c, const sc_ray *r, sc_hitrec *best)
     for (size_t i = 0; i < c->iv->num_instances; i++) {
         const sc_scene_instance *in = &c->iv->instances[i];
         sc_ray o;
-        if (sc_accel_instance_ray(world, (uint32_t)i, r, &o) != SC_OK || !box_may_hit(c->obj_box[in->object], &o))
+        if (sc_accel_instance_ray(world, (uint32_t)i, r, &o) != SC_OK)
+            continue;
+        const double O[3] = { o.org[0], o.org[1], o.org[2] }, D[3] = { o.dir[0], o.dir[1], o.dir[2] };
+        if (!sc_tf_box_may_hit(c->obj_box[in->object], O, D, o.tmin, o.tmax))
             continue;
         sc_trace_closest_brute(c->obj_bvh[in->object], &o, &h);
         if (h.prim != SC_HITREC_MISS && (best->prim == SC_HITREC_MISS || h.t < best->t))
@@ -276,10 +256,9 @@ static sc_status prepare_instances(bench_ctx *c)
         if ((st = sc_bvh_build(&v->objects[k], &cfg, &c->obj_bvh[k])) != SC_OK ||
             (st = sc_mesh_bounds(&v->objects[k], lo, hi)) != SC_OK)
             return st;
-        for (int a = 0; a < 3; a++) {
-            const double pad = 1e-6 * ((double)hi[a] - lo[a] + fmax(fabs(lo[a]), fabs(hi[a]))) + 1e-300;
-            c->obj_box[k][a] = lo[a] - pad, c->obj_box[k][3 + a] = hi[a] + pad;
-        }
+        for (int a = 0; a < 3; a++)
+            c->obj_box[k][a] = lo[a], c->obj_box[k][3 + a] = hi[a];
+        sc_tf_box_pad(c->obj_box[k]);
     }
     return SC_OK;
 }

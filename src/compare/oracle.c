@@ -118,12 +118,7 @@ static sc_status mesh_prepare(const sc_checked_mesh *checked, oracle_mesh *m)
                     if (x < b[a]) b[a] = x;
                     if (x > b[3 + a]) b[3 + a] = x;
                 }
-        /* generous padding: the slab test below only needs to err outwards */
-        for (int a = 0; a < 3; a++) {
-            double pad = 1e-7 * ((b[3 + a] - b[a]) + fmax(fabs(b[a]), fabs(b[3 + a]))) + 1e-300;
-            b[a] -= pad;
-            b[3 + a] += pad;
-        }
+        sc_tf_box_pad(b);
     }
     return SC_OK;
 }
@@ -132,35 +127,6 @@ static void mesh_release(oracle_mesh *m)
 {
     free(m->v), free(m->id), free(m->box);
     memset(m, 0, sizeof *m);
-}
-
-static int box_may_hit(const double *b, const double O[3], const double D[3], double tmin, double tmax)
-{
-    double tn = -INFINITY, tf = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        if (D[a] == 0) {
-            if (O[a] < b[a] || O[a] > b[3 + a])
-                return 0;
-            continue;
-        }
-        double t1 = (b[a] - O[a]) / D[a], t2 = (b[3 + a] - O[a]) / D[a];
-        if (t1 > t2) {
-            double s = t1;
-            t1 = t2, t2 = s;
-        }
-        if (t1 > tn) tn = t1;
-        if (t2 < tf) tf = t2;
-    }
-    double slack = 1e-9 * (fabs(tn) + fabs(tf));
-    if (isnan(slack))
-        return 1;
-    if (tn > tf + slack)
-        return 0;
-    if (tf < tmin - 1e-9 * fabs(tmin) - slack)
-        return 0;
-    if (tn > tmax + 1e-9 * fabs(tmax) + slack)
-        return 0;
-    return 1;
 }
 
 static void *run_job(void *arg)
@@ -188,7 +154,7 @@ static void *run_job(void *arg)
         h->t = INFINITY;
         nc = 0;
         for (size_t c = 0; c < m->nclusters; c++) {
-            if (!box_may_hit(m->box[c], O, D, tmin, tmax))
+            if (!sc_tf_box_may_hit(m->box[c], O, D, tmin, tmax))
                 continue;
             size_t end = (c + 1) * CLUSTER < m->ntri ? (c + 1) * CLUSTER : m->ntri;
             for (size_t k = c * CLUSTER; k < end; k++) {
@@ -476,12 +442,8 @@ sc_status sc_oracle_run_scene(const sc_oracle_scene *sc, const sc_ray *rays, siz
         }
         /* the object's box, padded as the cluster boxes are: an object ray
          * that misses it misses every triangle */
-        double box[6];
-        for (int a = 0; a < 3; a++) {
-            double lo = obj->lo[a], hi = obj->hi[a];
-            double pad = 1e-7 * ((hi - lo) + fmax(fabs(lo), fabs(hi))) + 1e-300;
-            box[a] = lo - pad, box[3 + a] = hi + pad;
-        }
+        double box[6] = { obj->lo[0], obj->lo[1], obj->lo[2], obj->hi[0], obj->hi[1], obj->hi[2] };
+        sc_tf_box_pad(box);
         for (size_t i = 0; i < sc->num_instances && st == SC_OK; i++) {
             if (sc->instances[i].object != k)
                 continue;
@@ -493,7 +455,7 @@ sc_status sc_oracle_run_scene(const sc_oracle_scene *sc, const sc_ray *rays, siz
                     break;
                 }
                 const double O[3] = { o.org[0], o.org[1], o.org[2] }, D[3] = { o.dir[0], o.dir[1], o.dir[2] };
-                if (box_may_hit(box, O, D, o.tmin, o.tmax)) {
+                if (sc_tf_box_may_hit(box, O, D, o.tmin, o.tmax)) {
                     idx[ns] = r;
                     orays[ns++] = o;
                 }

@@ -1,6 +1,8 @@
 /* The conservative double filter shared by the exact oracle (oracle.c) and
  * the crossing classifier (crossing.c): both must reject exactly the same
- * triangles, so there is one copy. Internal to src/compare. */
+ * triangles, so there is one copy; and the padded box test by which the
+ * oracle and bench's brute-force check skip whole clusters or objects.
+ * Internal to src/compare. */
 #ifndef SC_COMPARE_TRI_FILTER_H
 #define SC_COMPARE_TRI_FILTER_H
 
@@ -73,6 +75,48 @@ static inline int sc_tri_filter(const double v[9], const double O[3], const doub
     if (hi < tmin || lo > tmax)
         return 0;
     *t_lo = lo > tmin ? lo : tmin;
+    return 1;
+}
+
+/* Widens box (lo[3], hi[3], of float coordinates) outward generously: the
+ * slab test below only needs to err outwards. */
+static inline void sc_tf_box_pad(double b[6])
+{
+    for (int a = 0; a < 3; a++) {
+        const double pad = 1e-7 * ((b[3 + a] - b[a]) + fmax(fabs(b[a]), fabs(b[3 + a]))) + 1e-300;
+        b[a] -= pad;
+        b[3 + a] += pad;
+    }
+}
+
+/* 0: the ray O + tD certainly misses the (padded) box within [tmin, tmax];
+ * 1 otherwise (also whenever the arithmetic is in doubt). */
+static inline int sc_tf_box_may_hit(const double *b, const double O[3], const double D[3], double tmin, double tmax)
+{
+    double tn = -INFINITY, tf = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (D[a] == 0) {
+            if (O[a] < b[a] || O[a] > b[3 + a])
+                return 0;
+            continue;
+        }
+        double t1 = (b[a] - O[a]) / D[a], t2 = (b[3 + a] - O[a]) / D[a];
+        if (t1 > t2) {
+            double s = t1;
+            t1 = t2, t2 = s;
+        }
+        if (t1 > tn) tn = t1;
+        if (t2 < tf) tf = t2;
+    }
+    double slack = 1e-9 * (fabs(tn) + fabs(tf));
+    if (isnan(slack))
+        return 1;
+    if (tn > tf + slack)
+        return 0;
+    if (tf < tmin - 1e-9 * fabs(tmin) - slack)
+        return 0;
+    if (tn > tmax + 1e-9 * fabs(tmax) + slack)
+        return 0;
     return 1;
 }
 

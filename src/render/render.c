@@ -78,12 +78,9 @@ sc_status sc_render_closest(const sc_render_ctx *c, const sc_ray *rays, size_t n
     return sc_trace_closest_n(c->bvh, rays, sizeof *rays, hits, sizeof *hits, n, 0, stats);
 }
 
-sc_status sc_render_occluded(const sc_render_ctx *c, const sc_ray *rays, size_t n, uint8_t *occluded,
-                             int coherent, sc_trace_stats *stats)
+sc_status sc_render_occluded_bytes(sc_render_any_n any_n, const void *scene, const sc_ray *rays, size_t n,
+                                   uint8_t *occluded, sc_trace_stats *stats)
 {
-    const sc_render_backend *b = c->o->backend;
-    if (b)
-        return b->occluded(b->ctx, rays, n, occluded, coherent);
     enum { CHUNK = 256 };
     int32_t occ[CHUNK];
     sc_status st = SC_OK;
@@ -91,13 +88,27 @@ sc_status sc_render_occluded(const sc_render_ctx *c, const sc_ray *rays, size_t 
         size_t m = n - i < CHUNK ? n - i : CHUNK;
         for (size_t k = 0; k < m; k++)
             occ[k] = occluded[i + k];   /* a refused ray keeps what the caller put */
-        sc_status s = sc_trace_any_n(c->bvh, rays + i, sizeof *rays, occ, sizeof *occ, m, 0, stats);
+        sc_status s = any_n(scene, rays + i, occ, m, stats);
         if (s != SC_OK)
             st = s;
         for (size_t k = 0; k < m; k++)
             occluded[i + k] = occ[k] != 0;
     }
     return st;
+}
+
+static sc_status bvh_any_n(const void *bvh, const sc_ray *rays, int32_t *occ, size_t n, sc_trace_stats *stats)
+{
+    return sc_trace_any_n(bvh, rays, sizeof *rays, occ, sizeof *occ, n, 0, stats);
+}
+
+sc_status sc_render_occluded(const sc_render_ctx *c, const sc_ray *rays, size_t n, uint8_t *occluded,
+                             int coherent, sc_trace_stats *stats)
+{
+    const sc_render_backend *b = c->o->backend;
+    if (b)
+        return b->occluded(b->ctx, rays, n, occluded, coherent);
+    return sc_render_occluded_bytes(bvh_any_n, c->bvh, rays, n, occluded, stats);
 }
 
 static void add_stats(sc_trace_stats *a, const sc_trace_stats *b)

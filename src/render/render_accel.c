@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "common/sc_clock.h"
+#include "render_internal.h"
 #include "spherecull/sc_render.h"
 
 struct sc_scene_accel {
@@ -144,24 +145,17 @@ sc_status sc_scene_accel_closest(const sc_scene_accel *a, const sc_ray *rays, si
     return st;
 }
 
+static sc_status world_any_n(const void *world, const sc_ray *rays, int32_t *occ, size_t n, sc_trace_stats *stats)
+{
+    return sc_accel_any_n(world, rays, sizeof *rays, occ, sizeof *occ, n, 0, stats);
+}
+
 sc_status sc_scene_accel_any(const sc_scene_accel *a, const sc_ray *rays, size_t n, uint8_t *occ,
                              sc_trace_stats *stats)
 {
     if (!a || (n && (!rays || !occ)))
         return SC_ERR_INVALID_ARGUMENT;
-    int32_t buf[256];
-    sc_status st = SC_OK;
-    for (size_t i = 0; i < n; i += 256) {
-        const size_t m = n - i < 256 ? n - i : 256;
-        for (size_t j = 0; j < m; j++)
-            buf[j] = occ[i + j];   /* a refused ray keeps what the caller put, as render.c's own */
-        sc_status s = sc_accel_any_n(a->world, rays + i, sizeof *rays, buf, sizeof *buf, m, 0, stats);
-        if (s != SC_OK)
-            st = s;
-        for (size_t j = 0; j < m; j++)
-            occ[i + j] = buf[j] != 0;
-    }
-    return st;
+    return sc_render_occluded_bytes(world_any_n, a->world, rays, n, occ, stats);
 }
 
 const sc_accel *sc_scene_accel_world(const sc_scene_accel *a)

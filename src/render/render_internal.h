@@ -28,6 +28,14 @@ typedef struct sc_render_ctx {
     int num_light_choices;   /* the point/directional lights, + 1 for all emitters */
 } sc_render_ctx;
 
+/* Occlusion as bytes through a stream call that writes int32 flags
+ * (sc_trace_any_n, sc_accel_any_n, behind a thunk), in chunks on the
+ * stack; a refused ray keeps what the caller put. */
+typedef sc_status (*sc_render_any_n)(const void *scene, const sc_ray *rays, int32_t *occluded, size_t n,
+                                     sc_trace_stats *stats);
+sc_status sc_render_occluded_bytes(sc_render_any_n any_n, const void *scene, const sc_ray *rays, size_t n,
+                                   uint8_t *occluded, sc_trace_stats *stats);
+
 /* The back end's queries (opt->backend, else our BVH's stream calls). */
 sc_status sc_render_closest(const sc_render_ctx *c, const sc_ray *rays, size_t n, sc_hitrec *hits,
                             int coherent, sc_trace_stats *stats);
