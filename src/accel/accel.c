@@ -345,13 +345,12 @@ static sc_status build_top(sc_accel *a)
         return SC_OK;
     const size_t nitems = a->ninst + 1;
     box3 *boxes = malloc(nitems * sizeof *boxes);
-    float (*cen)[3] = malloc(nitems * sizeof *cen);
     uint32_t *ids = malloc(nitems * sizeof *ids);
     sc_bnode *bn = malloc((2 * nitems + 1) * sizeof *bn);
     sc_bvh_node8 *nodes = aligned_alloc(64, (nitems + 1) * sizeof(sc_bvh_node8));
     a->items = malloc(nitems * sizeof *a->items);
     sc_status st = SC_ERR_OUT_OF_MEMORY;
-    if (!boxes || !cen || !ids || !bn || !nodes || !a->items) {
+    if (!boxes || !ids || !bn || !nodes || !a->items) {
         free(nodes);
         goto out;
     }
@@ -388,8 +387,6 @@ static sc_status build_top(sc_accel *a)
             for (int k = 0; k < 3; k++)
                 boxes[n].lo[k] = b->root_lo[k], boxes[n].hi[k] = b->root_hi[k];
         }
-        for (int k = 0; k < 3; k++)
-            cen[n][k] = 0.5f * boxes[n].lo[k] + 0.5f * boxes[n].hi[k];
         box_grow(&all, &boxes[n]);
         ids[n++] = (uint32_t)i;
     }
@@ -400,7 +397,7 @@ static sc_status build_top(sc_accel *a)
         a->top.lo[k] = all.lo[k], a->top.hi[k] = all.hi[k];
     const sc_sah_params sah = { 1, 16, 1.0f, 1 };
     size_t count;
-    uint32_t root = sc_build_binned_sah(boxes, (const float (*)[3])cen, ids, n, &sah, bn, &count);
+    uint32_t root = sc_build_binned_sah(boxes, ids, n, &sah, bn, &count);
     top_builder T = { bn, ids, nodes, 0 };
     if (bn[root].leaf)
         top_collapse(&T, &root, 1);
@@ -409,7 +406,6 @@ static sc_status build_top(sc_accel *a)
     a->top_nodes = T.used;
 out:
     free(boxes);
-    free(cen);
     free(ids);
     free(bn);
     return st;

@@ -12,6 +12,78 @@
 #include "box3.h"
 #include "build_binned_sah.h"
 
+/* A box in four lanes (x, y, z, unused) for the inner loops: two min/max
+ * instead of six compares per grow. vbox_grow is box_grow's compare lane
+ * for lane ((v)minps(a, b) = a < b ? a : b), so the tree has the same bits
+ * on the SSE2 path and the portable one. */
+#if defined(__SSE2__)
+#include <emmintrin.h>
+typedef struct vbox { __m128 lo, hi; } vbox;
+static inline vbox vbox_empty(void) { return (vbox){ _mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY) }; }
+/* lanes lo0 lo1 lo2 hi0 and lo2 hi0 hi1 hi2: two loads inside the box */
+static inline vbox vbox_load(const box3 *b)
+{
+    const __m128 t = _mm_loadu_ps(&b->lo[2]);
+    return (vbox){ _mm_loadu_ps(b->lo), _mm_shuffle_ps(t, t, _MM_SHUFFLE(3, 3, 2, 1)) };
+}
+static inline void vbox_grow(vbox *b, vbox o) { b->lo = _mm_min_ps(o.lo, b->lo), b->hi = _mm_max_ps(o.hi, b->hi); }
+static inline void vbox_grow_point(vbox *b, __m128 p) { b->lo = _mm_min_ps(p, b->lo), b->hi = _mm_max_ps(p, b->hi); }
+static inline __m128 vbox_centre(vbox b)
+{
+    return _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0.5f), b.lo), _mm_mul_ps(_mm_set1_ps(0.5f), b.hi));
+}
+static inline box3 vbox_box(vbox b)
+{
+    float lo[4], hi[4];
+    _mm_storeu_ps(lo, b.lo), _mm_storeu_ps(hi, b.hi);
+    return (box3){ { lo[0], lo[1], lo[2] }, { hi[0], hi[1], hi[2] } };
+}
+/* box_area's bits: (v)maxps(d, 0) is its d > 0 ? d : 0 */
+static inline float vbox_area(vbox b)
+{
+    float d[4];
+    _mm_storeu_ps(d, _mm_max_ps(_mm_sub_ps(b.hi, b.lo), _mm_setzero_ps()));
+    return 2 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+}
+/* the bin of centre c on each axis, before clamping */
+static inline void vbin(__m128 c, __m128 lo, __m128 scale, int k[4])
+{
+    _mm_storeu_si128((__m128i *)(void *)k, _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, lo), scale)));
+}
+static inline __m128 v3(const float *p) { return _mm_setr_ps(p[0], p[1], p[2], 0); }
+#else
+typedef struct vbox { box3 b; } vbox;
+typedef struct { float v[3]; } v3f;
+static inline vbox vbox_empty(void) { vbox b; box_empty(&b.b); return b; }
+static inline vbox vbox_load(const box3 *b) { return (vbox){ *b }; }
+static inline void vbox_grow(vbox *b, vbox o) { box_grow(&b->b, &o.b); }
+static inline void vbox_grow_point(vbox *b, v3f p)
+{
+    box3 c = { { p.v[0], p.v[1], p.v[2] }, { p.v[0], p.v[1], p.v[2] } };
+    box_grow(&b->b, &c);
+}
+static inline v3f vbox_centre(vbox b)
+{
+    v3f c;
+    for (int k = 0; k < 3; k++)
+        c.v[k] = 0.5f * b.b.lo[k] + 0.5f * b.b.hi[k];
+    return c;
+}
+static inline box3 vbox_box(vbox b) { return b.b; }
+static inline float vbox_area(vbox b) { return box_area(&b.b); }
+static inline void vbin(v3f c, v3f lo, v3f scale, int k[4])
+{
+    for (int a = 0; a < 3; a++)
+        k[a] = (int)((c.v[a] - lo.v[a]) * scale.v[a]);
+}
+static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
+#endif
+
+/* A primitive's centre on one axis: the bits of vbox_centre's lane. */
+static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
+
+static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
+
 #define MAX_BINS SC_SAH_MAX_BINS
 /* Below this depth SAH splits may be arbitrarily unbalanced; from it on the
  * builder splits at the object median, so that at most 31 more levels follow
@@ -19,8 +91,7 @@
 #define MEDIAN_DEPTH 32
 
 typedef struct sah_builder {
-    const box3 *pbox;
-    const float (*cen)[3];
+    box3 *pbox;              /* pbox[i]: the box of ids[i] */
     uint32_t *ids;
     sc_bnode *nodes;
     int max_leaf, bins;
@@ -28,34 +99,35 @@ typedef struct sah_builder {
     atomic_int spare;        /* threads that may still be started */
 } sah_builder;
 
-static void swap_ids(uint32_t *ids, size_t i, size_t j)
+/* The boxes move with their ids: every pass over a range reads two
+ * sequential streams, not boxes scattered by the id order. */
+static void swap_prims(sah_builder *B, size_t i, size_t j)
 {
-    uint32_t t = ids[i];
-    ids[i] = ids[j];
-    ids[j] = t;
+    uint32_t t = B->ids[i];
+    B->ids[i] = B->ids[j];
+    B->ids[j] = t;
+    box3 b = B->pbox[i];
+    B->pbox[i] = B->pbox[j];
+    B->pbox[j] = b;
 }
 
 /* Quickselect: ids[begin..end) partitioned around the element of rank mid by
  * centroid coordinate on axis (ties broken by id, so the result is
  * deterministic). */
-static int cen_less(const sah_builder *B, uint32_t x, uint32_t y, int axis)
-{
-    float a = B->cen[x][axis], b = B->cen[y][axis];
-    return a < b || (a == b && x < y);
-}
-
 static void select_median(sah_builder *B, size_t begin, size_t end, size_t mid, int axis)
 {
-    uint32_t *ids = B->ids;
     while (end - begin > 1) {
         size_t p = begin + (end - begin) / 2;
-        swap_ids(ids, p, end - 1);
-        uint32_t pivot = ids[end - 1];
+        swap_prims(B, p, end - 1);
+        const uint32_t pid = B->ids[end - 1];
+        const float pc = centre_of(&B->pbox[end - 1], axis);
         size_t store = begin;
-        for (size_t i = begin; i < end - 1; i++)
-            if (cen_less(B, ids[i], pivot, axis))
-                swap_ids(ids, i, store++);
-        swap_ids(ids, store, end - 1);
+        for (size_t i = begin; i < end - 1; i++) {
+            const float c = centre_of(&B->pbox[i], axis);
+            if (c < pc || (c == pc && B->ids[i] < pid))
+                swap_prims(B, i, store++);
+        }
+        swap_prims(B, store, end - 1);
         if (store == mid)
             return;
         if (mid < store)
@@ -92,15 +164,14 @@ static void *subtree_thread(void *arg)
 /* The box of the primitives ids[begin..end) and of their centres. */
 static void range_bounds(const sah_builder *B, size_t begin, size_t end, box3 *bounds, box3 *cb)
 {
-    box_empty(bounds);
-    box_empty(cb);
+    vbox b = vbox_empty(), c = vbox_empty();
     for (size_t i = begin; i < end; i++) {
-        uint32_t t = B->ids[i];
-        box_grow(bounds, &B->pbox[t]);
-        box3 c = { { B->cen[t][0], B->cen[t][1], B->cen[t][2] },
-                   { B->cen[t][0], B->cen[t][1], B->cen[t][2] } };
-        box_grow(cb, &c);
+        const vbox p = vbox_load(&B->pbox[i]);
+        vbox_grow(&b, p);
+        vbox_grow_point(&c, vbox_centre(p));
     }
+    *bounds = vbox_box(b);
+    *cb = vbox_box(c);
 }
 
 /* One more thread for a subtree, if the budget allows; 1 if taken. */
@@ -135,7 +206,7 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
     const int nb = B->bins;
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = 0;
-    box3 best_lbox, best_rbox;           /* the two sides' boxes of the best split */
+    vbox best_lbox = vbox_empty(), best_rbox = vbox_empty();   /* the sides of the best split */
     if (depth < MEDIAN_DEPTH) {
         float scale[3];
         int live[3];
@@ -144,53 +215,60 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
             live[axis] = ext > 0;
             scale[axis] = live[axis] ? (float)nb * (1 - 0x1p-20f) / ext : 0;
         }
-        box3 bb[3][MAX_BINS];
+        vbox vb[3][MAX_BINS];
         size_t cnt[3][MAX_BINS];
         for (int axis = 0; axis < 3; axis++)
             for (int k = 0; k < nb; k++) {
-                box_empty(&bb[axis][k]);
+                vb[axis][k] = vbox_empty();
                 cnt[axis][k] = 0;
             }
+        const __typeof__(v3(scale)) vlo = v3(cb.lo), vscale = v3(scale);
         for (size_t i = begin; i < end; i++) {
-            uint32_t t = B->ids[i];
-            const box3 *pb = &B->pbox[t];
+            const vbox p = vbox_load(&B->pbox[i]);
+            int k[4];
+            vbin(vbox_centre(p), vlo, vscale, k);
             for (int axis = 0; axis < 3; axis++) {
-                int k = (int)((B->cen[t][axis] - cb.lo[axis]) * scale[axis]);
-                k = k < 0 ? 0 : k >= nb ? nb - 1 : k;
-                cnt[axis][k]++;
-                box_grow(&bb[axis][k], pb);
+                const int kk = clamp_bin(k[axis], nb);
+                cnt[axis][kk]++;
+                vbox_grow(&vb[axis][kk], p);
             }
         }
         for (int axis = 0; axis < 3; axis++) {
             if (!live[axis])
                 continue;
+            /* Only the splits right after a non-empty bin: a split after an
+             * empty bin has the sides and the cost of the one before it,
+             * which comes first and wins the strict compare. So the tree is
+             * that of the sweep over every bin, and the small ranges (most
+             * nodes) sweep a few bins, not all of them. */
+            int idx[MAX_BINS], m = 0;
+            for (int k = 0; k < nb; k++)
+                if (cnt[axis][k])
+                    idx[m++] = k;
             float rarea[MAX_BINS];
             size_t rcnt[MAX_BINS];
-            box3 rbox[MAX_BINS];
-            box3 acc;
-            box_empty(&acc);
+            vbox rbox[MAX_BINS];
+            vbox acc = vbox_empty();
             size_t c = 0;
-            for (int k = nb - 1; k > 0; k--) {
-                box_grow(&acc, &bb[axis][k]);
-                c += cnt[axis][k];
-                rarea[k] = box_area(&acc);
-                rcnt[k] = c;
-                rbox[k] = acc;
+            for (int j = m - 1; j > 0; j--) {
+                vbox_grow(&acc, vb[axis][idx[j]]);
+                c += cnt[axis][idx[j]];
+                rarea[j] = vbox_area(acc);
+                rcnt[j] = c;
+                rbox[j] = acc;
             }
-            box_empty(&acc);
+            acc = vbox_empty();
             c = 0;
-            for (int k = 0; k < nb - 1; k++) {
-                box_grow(&acc, &bb[axis][k]);
-                c += cnt[axis][k];
-                if (c == 0 || rcnt[k + 1] == 0)
-                    continue;
-                float cost = box_area(&acc) * leaf_blocks(c) + rarea[k + 1] * leaf_blocks(rcnt[k + 1]);
+            for (int j = 0; j < m - 1; j++) {
+                vbox_grow(&acc, vb[axis][idx[j]]);
+                c += cnt[axis][idx[j]];
+                float cost = vbox_area(acc) * leaf_blocks(c) + rarea[j + 1] * leaf_blocks(rcnt[j + 1]);
                 if (cost < best_cost) {
                     best_cost = cost;
                     best_axis = axis;
-                    best_bin = k;
+                    best_bin = idx[j];
                     best_lbox = acc;
-                    best_rbox = rbox[k + 1];
+                    best_rbox = rbox[j + 1];
                 }
             }
         }
@@ -209,25 +287,22 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
     if (best_axis >= 0) {
         float ext = cb.hi[best_axis] - cb.lo[best_axis];
         float scale = (float)nb * (1 - 0x1p-20f) / ext;
-        box_empty(&lcb);
-        box_empty(&rcb);
+        vbox vl = vbox_empty(), vr = vbox_empty();
         size_t i = begin, j = end;
         while (i < j) {
-            uint32_t t = B->ids[i];
-            box3 c = { { B->cen[t][0], B->cen[t][1], B->cen[t][2] },
-                       { B->cen[t][0], B->cen[t][1], B->cen[t][2] } };
-            int k = (int)((B->cen[t][best_axis] - cb.lo[best_axis]) * scale);
-            k = k < 0 ? 0 : k >= nb ? nb - 1 : k;
+            const vbox p = vbox_load(&B->pbox[i]);
+            const int k = clamp_bin((int)((centre_of(&B->pbox[i], best_axis) - cb.lo[best_axis]) * scale), nb);
             if (k <= best_bin) {
-                box_grow(&lcb, &c);
+                vbox_grow_point(&vl, vbox_centre(p));
                 i++;
             } else {
-                box_grow(&rcb, &c);
-                swap_ids(B->ids, i, --j);
+                vbox_grow_point(&vr, vbox_centre(p));
+                swap_prims(B, i, --j);
             }
         }
+        lcb = vbox_box(vl), rcb = vbox_box(vr);
         mid = i;
-        lb = best_lbox, rb = best_rbox;
+        lb = vbox_box(best_lbox), rb = vbox_box(best_rbox);
         known = 1;
     } else {
         /* Deep, or all centroids equal: object median on the widest axis. */
@@ -265,10 +340,10 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
     }
 }
 
-uint32_t sc_build_binned_sah(const box3 *boxes, const float (*centres)[3], uint32_t *ids, size_t n,
-                             const sc_sah_params *p, sc_bnode *nodes, size_t *node_count)
+uint32_t sc_build_binned_sah(box3 *boxes, uint32_t *ids, size_t n, const sc_sah_params *p, sc_bnode *nodes,
+                             size_t *node_count)
 {
-    sah_builder B = { boxes, centres, ids, nodes, p->max_leaf, p->bins, p->traversal_cost, 0 };
+    sah_builder B = { boxes, ids, nodes, p->max_leaf, p->bins, p->traversal_cost, 0 };
     atomic_init(&B.spare, p->threads > 1 ? p->threads - 1 : 0);
     box3 bounds, cb;
     range_bounds(&B, 0, n, &bounds, &cb);

@@ -27,11 +27,12 @@ typedef struct sc_sah_params {
 /* Ranges smaller than this are not worth a thread. */
 #define SC_SAH_PARALLEL_MIN 65536
 
-/* ids[0..n) (n >= 1) are permuted so that every leaf is a contiguous range;
- * nodes needs room for 2n - 1 (*node_count; some slots stay unused). The
- * same tree, node indices included, for any p->threads. Returns the root's
- * index (0). */
-uint32_t sc_build_binned_sah(const box3 *boxes, const float (*centres)[3], uint32_t *ids, size_t n,
-                             const sc_sah_params *p, sc_bnode *nodes, size_t *node_count);
+/* boxes[i] is the box of ids[i] (finite; its centre, by which it is
+ * binned, is 0.5 lo + 0.5 hi); the two arrays (n >= 1) are permuted
+ * together so that every leaf is a contiguous range of ids; nodes needs
+ * room for 2n - 1 (*node_count; some slots stay unused). The same tree,
+ * node indices included, for any p->threads. Returns the root's index (0). */
+uint32_t sc_build_binned_sah(box3 *boxes, uint32_t *ids, size_t n, const sc_sah_params *p, sc_bnode *nodes,
+                             size_t *node_count);
 
 #endif

@@ -107,14 +107,13 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     B.first = first;
     size_t n = triangle_count;
     box3 *pbox = malloc(sizeof(box3) * (n ? n : 1));
-    float (*cen)[3] = malloc(sizeof(float[3]) * (n ? n : 1));
     uint32_t *ids = malloc(sizeof(uint32_t) * (n ? n : 1));
     sc_bnode *bn = malloc(sizeof(sc_bnode) * (2 * n + 1));
     B.auto_use = calloc(2 * n + 1, 1);
     B.ids = ids;
     B.bn = bn;
     st = SC_ERR_OUT_OF_MEMORY;
-    if (!bvh || !first || !pbox || !cen || !ids || !bn || !B.auto_use)
+    if (!bvh || !first || !pbox || !ids || !bn || !B.auto_use)
         goto fail;
     bvh->cfg = cfg;
     bvh->first = first;
@@ -136,9 +135,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
         }
         if (!finite)
             continue;
-        pbox[t] = b;
-        for (int k = 0; k < 3; k++)
-            cen[t][k] = 0.5f * b.lo[k] + 0.5f * b.hi[k];
+        pbox[used] = b;
         ids[used++] = (uint32_t)t;
     }
     bvh->triangles = used;
@@ -153,7 +150,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
         }
         const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost, threads };
         size_t bn_count;
-        uint32_t root = sc_build_binned_sah(pbox, (const float (*)[3])cen, ids, used, &sah, bn, &bn_count);
+        uint32_t root = sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
         B.root_area = box_area(&B.bn[root].box);
         if (!(B.root_area > 0))
             B.root_area = 1;
@@ -194,7 +191,6 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     bvh->sah_cost = bvh->built_sah_cost = B.sah;
     bvh->build_seconds = sc_now_seconds() - t0;
     free(pbox);
-    free(cen);
     free(ids);
     free(bn);
     free(B.auto_use);
@@ -204,7 +200,6 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
 fail:
     free(first);
     free(pbox);
-    free(cen);
     free(ids);
     free(bn);
     free(B.auto_use);
