@@ -281,8 +281,9 @@ static void test_shared_bvh(void **state)
     assert_true(ran >= 1);
 }
 
-/* A build on several threads (its own C11 threads for large subtrees) is
- * bit for bit the single-threaded one: nodes, leaves, figures. Under
+/* A build on several threads (POSIX threads for large subtrees, and for
+ * the subtrees of the collapse's write pass) is bit for bit the
+ * single-threaded one: nodes, leaves, figures, in every leaf layout. Under
  * ThreadSanitizer this is also the race check of the parallel builder. */
 static void test_parallel_build(void **state)
 {
@@ -291,27 +292,35 @@ static void test_parallel_build(void **state)
     soup big;
     make_soup(77, BIG, 0.01, &big);
     const sc_mesh_view m = { big.pos, 3 * BIG, big.idx, BIG, 0, 0 };
-    sc_bvh *ref = NULL;
-    sc_bvh_config cfg;
-    sc_bvh_config_default(&cfg);
-    assert_int_equal(cfg.threads, 1);
-    assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
-    const int counts[] = { 2, 3, 0 };
-    for (int c = 0; c < 3; c++) {
-        cfg.threads = counts[c];
-        sc_bvh *b = NULL;
-        assert_int_equal(sc_bvh_build(&m, &cfg, &b), SC_OK);
-        assert_int_equal(b->node_count, ref->node_count);
-        assert_int_equal(b->leaf_bytes, ref->leaf_bytes);
-        assert_true(b->sah_cost == ref->sah_cost);
-        assert_memory_equal(b->nodes, ref->nodes, ref->node_count * sizeof *ref->nodes);
-        assert_memory_equal(b->leaves, ref->leaves, ref->leaf_bytes);
-        sc_bvh_free(b);
+    const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_COMPACT };
+    for (int md = 0; md < 3; md++) {
+        sc_bvh *ref = NULL;
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        assert_int_equal(cfg.threads, 1);
+        cfg.prefilter = modes[md];
+        assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
+        const int counts[] = { 2, 3, 0 };
+        for (int c = 0; c < 3; c++) {
+            cfg.threads = counts[c];
+            sc_bvh *b = NULL;
+            assert_int_equal(sc_bvh_build(&m, &cfg, &b), SC_OK);
+            assert_int_equal(b->node_count, ref->node_count);
+            assert_int_equal(b->leaf_count, ref->leaf_count);
+            assert_int_equal(b->leaf_bytes, ref->leaf_bytes);
+            assert_int_equal(b->sphere_bytes, ref->sphere_bytes);
+            assert_int_equal(b->leaves_with_spheres, ref->leaves_with_spheres);
+            assert_int_equal(b->depth, ref->depth);
+            assert_true(b->sah_cost == ref->sah_cost);
+            assert_memory_equal(b->nodes, ref->nodes, ref->node_count * sizeof *ref->nodes);
+            assert_memory_equal(b->leaves, ref->leaves, ref->leaf_bytes);
+            sc_bvh_free(b);
+        }
+        cfg.threads = -1;
+        sc_bvh *bad = NULL;
+        assert_int_equal(sc_bvh_build(&m, &cfg, &bad), SC_ERR_INVALID_ARGUMENT);
+        sc_bvh_free(ref);
     }
-    cfg.threads = -1;
-    sc_bvh *bad = NULL;
-    assert_int_equal(sc_bvh_build(&m, &cfg, &bad), SC_ERR_INVALID_ARGUMENT);
-    sc_bvh_free(ref);
     free_soup(&big);
 }
 

@@ -21,7 +21,24 @@ typedef struct bvh_builder {
     int max_depth;
     double sah;
     float root_area;
+    /* Parallel write pass: the measuring pass records every subtree whose
+     * 8-wide node lies at depth SC_COLLAPSE_JOB_DEPTH (its binary children and
+     * the node and leaf counters before and after it); the write pass leaves
+     * those subtrees to sc_collapse_jobs, which writes them on threads from
+     * the recorded counters into disjoint node and leaf ranges. */
+    int record, defer;
+    size_t njobs, next_job;
+    struct collapse_job {
+        uint32_t kids[2];
+        int nk;
+        size_t node_in, leaf_in, node_out, leaf_out;
+    } jobs[64];
 } bvh_builder;
+
+#define SC_COLLAPSE_JOB_DEPTH 3
+
+/* Writes the subtrees the write pass deferred, on up to `threads` threads. */
+void sc_collapse_jobs(bvh_builder *B, int threads);
 
 static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)
 {

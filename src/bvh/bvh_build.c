@@ -158,10 +158,18 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
             bvh->root_lo[k] = B.bn[root].box.lo[k];
             bvh->root_hi[k] = B.bn[root].box.hi[k];
         }
-        /* Pass 1 measures, pass 2 writes with the same traversal order. */
+        /* Pass 1 measures, pass 2 writes with the same traversal order; on
+         * several threads pass 2 writes the subtrees pass 1 recorded in
+         * parallel (the same bytes: each starts from its recorded counters),
+         * and the figures are pass 1's. */
         B.bvh = bvh;
+        const int parallel = threads > 1 && used >= SC_SAH_PARALLEL_MIN;
+        bvh_builder measured = B;
         for (int pass = 0; pass < 2; pass++) {
             B.dry = pass == 0;
+            B.record = parallel && pass == 0;
+            B.defer = parallel && pass == 1;
+            B.next_job = 0;
             B.node_used = B.leaf_used = B.sphere_used = B.leaves_emitted = B.leaves_spheres = 0;
             B.sah = 0;
             B.max_depth = 0;
@@ -171,7 +179,14 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
                 sc_collapse_bvh8(&B, &root, 1, 1);
             else
                 sc_collapse_bvh8(&B, kids, 2, 1);
+            if (pass == 1 && parallel) {
+                sc_collapse_jobs(&B, threads);
+                B.sah = measured.sah, B.max_depth = measured.max_depth;
+                B.leaves_emitted = measured.leaves_emitted, B.leaves_spheres = measured.leaves_spheres;
+                B.sphere_used = measured.sphere_used;
+            }
             if (pass == 0) {
+                measured = B;
                 bvh->nodes = alloc_aligned(B.node_used * sizeof(sc_bvh_node8));
                 bvh->leaves = alloc_aligned(B.leaf_used);
                 if (!bvh->nodes || !bvh->leaves)

@@ -2,13 +2,35 @@
  * repeatedly opening the child with the largest surface area, as Embree's
  * BVH8 builder does. Runs twice with the same order: once to measure
  * (B->dry), once to write. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #include "build_internal.h"
 
 uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids_in, int nk_in, int depth)
 {
+    if (depth == SC_COLLAPSE_JOB_DEPTH && (B->record || B->defer)) {
+        if (B->defer && B->next_job < B->njobs) {
+            /* the subtree the measuring pass recorded as this one */
+            const struct collapse_job *j = &B->jobs[B->next_job++];
+            B->node_used = j->node_out, B->leaf_used = j->leaf_out;
+            return (uint64_t)(j->node_in * sizeof(sc_bvh_node8));
+        }
+        if (B->njobs < sizeof B->jobs / sizeof B->jobs[0]) {
+            struct collapse_job *j = &B->jobs[B->njobs++];
+            memcpy(j->kids, kids_in, sizeof(uint32_t) * (size_t)nk_in);
+            j->nk = nk_in;
+            j->node_in = B->node_used, j->leaf_in = B->leaf_used;
+            B->record = 0;
+            uint64_t ref = sc_collapse_bvh8(B, kids_in, nk_in, depth);
+            B->record = 1;
+            j->node_out = B->node_used, j->leaf_out = B->leaf_used;
+            return ref;
+        }
+    }
     uint32_t kids[SC_BVH_N];
     int nk = nk_in;
     memcpy(kids, kids_in, sizeof(uint32_t) * (size_t)nk);
@@ -72,3 +94,41 @@ uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids_in, int nk_in, in
     return (uint64_t)(my * sizeof(sc_bvh_node8));
 }
 
+
+typedef struct collapse_worker {
+    bvh_builder *B;
+    atomic_size_t *next;
+} collapse_worker;
+
+static void *collapse_work(void *arg)
+{
+    collapse_worker *w = arg;
+    for (;;) {
+        size_t k = atomic_fetch_add(w->next, 1);
+        if (k >= w->B->njobs)
+            return NULL;
+        /* a private builder: its counters start where the measuring pass
+         * found this subtree's, so it writes the nodes and leaves it wrote */
+        bvh_builder L = *w->B;
+        L.defer = L.record = 0;
+        L.node_used = L.jobs[k].node_in, L.leaf_used = L.jobs[k].leaf_in;
+        sc_collapse_bvh8(&L, L.jobs[k].kids, L.jobs[k].nk, SC_COLLAPSE_JOB_DEPTH);
+    }
+}
+
+void sc_collapse_jobs(bvh_builder *B, int threads)
+{
+    atomic_size_t next;
+    atomic_init(&next, 0);
+    collapse_worker w = { B, &next };
+    pthread_t th[SC_BVH_MAX_THREADS];
+    int started = 0;
+    for (int i = 1; i < threads && (size_t)i < B->njobs; i++) {
+        if (pthread_create(&th[started], NULL, collapse_work, &w) != 0)
+            break;      /* fewer threads: the caller does the rest */
+        started++;
+    }
+    collapse_work(&w);
+    for (int i = 0; i < started; i++)
+        pthread_join(th[i], NULL);
+}
