@@ -215,13 +215,14 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
             live[axis] = ext > 0;
             scale[axis] = live[axis] ? (float)nb * (1 - 0x1p-20f) / ext : 0;
         }
+        /* A bin is set up when its first primitive arrives (its box is that
+         * primitive's, the bits of growing an empty box) and marked in
+         * `used`: a range of a few primitives (most ranges) touches a few
+         * bins and neither clears nor scans all of them. */
+        _Static_assert(MAX_BINS <= 64, "the used-bin masks are 64 bits");
         vbox vb[3][MAX_BINS];
         size_t cnt[3][MAX_BINS];
-        for (int axis = 0; axis < 3; axis++)
-            for (int k = 0; k < nb; k++) {
-                vb[axis][k] = vbox_empty();
-                cnt[axis][k] = 0;
-            }
+        uint64_t used[3] = { 0, 0, 0 };
         const __typeof__(v3(scale)) vlo = v3(cb.lo), vscale = v3(scale);
         for (size_t i = begin; i < end; i++) {
             const vbox p = vbox_load(&B->pbox[i]);
@@ -229,8 +230,14 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
             vbin(vbox_centre(p), vlo, vscale, k);
             for (int axis = 0; axis < 3; axis++) {
                 const int kk = clamp_bin(k[axis], nb);
-                cnt[axis][kk]++;
-                vbox_grow(&vb[axis][kk], p);
+                if (used[axis] >> kk & 1) {
+                    cnt[axis][kk]++;
+                    vbox_grow(&vb[axis][kk], p);
+                } else {
+                    used[axis] |= 1ull << kk;
+                    cnt[axis][kk] = 1;
+                    vb[axis][kk] = p;
+                }
             }
         }
         for (int axis = 0; axis < 3; axis++) {
@@ -242,9 +249,8 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
              * that of the sweep over every bin, and the small ranges (most
              * nodes) sweep a few bins, not all of them. */
             int idx[MAX_BINS], m = 0;
-            for (int k = 0; k < nb; k++)
-                if (cnt[axis][k])
-                    idx[m++] = k;
+            for (uint64_t u = used[axis]; u; u &= u - 1)
+                idx[m++] = __builtin_ctzll(u);
             float rarea[MAX_BINS];
             size_t rcnt[MAX_BINS];
             vbox rbox[MAX_BINS];
