@@ -16,6 +16,7 @@
 #include <stddef.h>
 #include <cmocka.h>
 
+#include "bvh/node_bvh8.h"
 #include "bvh_test_util.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_isa.h"
@@ -408,6 +409,9 @@ static void test_api(void **state)
     sc_bvh_config_default(&cfg);
     cfg.prefilter = SC_PREFILTER_MODE_COUNT;
     assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
+    sc_bvh_config_default(&cfg);
+    cfg.quality = SC_BUILD_QUALITY_COUNT;
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ pos, 3, idx, 1, 0, 0 }, &cfg, &b), SC_ERR_INVALID_ARGUMENT);
 
     /* Empty scene: every ray misses. */
     sc_bvh_config_default(&cfg);
@@ -531,6 +535,102 @@ static void test_strided_layout(void **state)
     scene_free(&sc);
 }
 
+/* The high build quality (reinsertion, optimize_reinsertion.c) moves inner
+ * nodes only: the same leaves, hits bit for bit those of the medium tree
+ * (the closest hit and its tie rule do not depend on the tree), every hit
+ * the oracle's, a lower SAH cost where the medium tree leaves room (leaves
+ * of one triangle in a soup and in long slivers), and within the
+ * traversal's depth on a stack of coincident triangles (median splits, the
+ * deepest trees). */
+static void test_quality_high(void **state)
+{
+    (void)state;
+    for (int kind = 0; kind < 4; kind++) {
+        static const char *const names[] = { "soup", "slivers", "coincident", "nested" };
+        scene_case sc = { .name = names[kind] };
+        if (kind == 3) {
+            /* triangles shrinking by 3 % each around nearly one point: the
+             * SAH peels one off per level down to the median depth */
+            tmesh *m = &sc.m;
+            const size_t n = 3000;
+            m->nt = n, m->nv = 3 * n;
+            m->pos = malloc(9 * n * sizeof *m->pos);
+            m->idx = malloc(3 * n * sizeof *m->idx);
+            assert_non_null(m->pos);
+            assert_non_null(m->idx);
+            double sc_ = 1;
+            for (size_t t = 0; t < n; t++, sc_ *= 0.97) {
+                const double v[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0.5 };
+                for (int j = 0; j < 9; j++)
+                    m->pos[9 * t + (size_t)j] = (float)(v[j] * sc_ + (j % 3 == 0 ? 1e-4 * (double)t : 0));
+                for (int j = 0; j < 3; j++)
+                    m->idx[3 * t + (size_t)j] = (uint32_t)(3 * t + (size_t)j);
+            }
+        } else if (kind == 0) {
+            scene_soup(&sc.m, 4000, 0, 21);
+        } else if (kind == 1) {
+            scene_slivers(&sc.m, 3000, 22);
+        } else {
+            /* 3000 copies of one triangle beside a small soup */
+            scene_soup(&sc.m, 500, 0, 23);
+            tmesh *m = &sc.m;
+            const size_t nt = m->nt + 3000;
+            m->idx = realloc(m->idx, 3 * nt * sizeof *m->idx);
+            assert_non_null(m->idx);
+            for (size_t t = m->nt; t < nt; t++)
+                for (int j = 0; j < 3; j++)
+                    m->idx[3 * t + j] = m->idx[j];
+            m->nt = nt;
+        }
+        make_rays(&sc, 20000, 30 + (uint64_t)kind);
+        for (int leaf = 1; leaf <= 8; leaf += 7) {
+            sc_bvh_config cfg;
+            sc_bvh_config_default(&cfg);
+            assert_int_equal(cfg.quality, SC_BUILD_QUALITY_MEDIUM);
+            cfg.leaf_size = leaf;
+            const sc_mesh_view mv = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
+            sc_bvh *med = NULL, *high = NULL;
+            assert_int_equal(sc_bvh_build(&mv, &cfg, &med), SC_OK);
+            cfg.quality = SC_BUILD_QUALITY_HIGH;
+            assert_int_equal(sc_bvh_build(&mv, &cfg, &high), SC_OK);
+            sc_bvh_info im, ih;
+            assert_int_equal(sc_bvh_get_info(med, &im), SC_OK);
+            assert_int_equal(sc_bvh_get_info(high, &ih), SC_OK);
+            print_message("%s leaf %d: SAH medium %.4f high %.4f, depth %d / %d\n", sc.name, leaf, im.sah_cost,
+                          ih.sah_cost, im.depth, ih.depth);
+            assert_int_equal(ih.triangles, im.triangles);
+            assert_int_equal(ih.leaves, im.leaves);
+            assert_true(ih.depth <= SC_BVH_MAX_DEPTH);
+            /* Reinsertion lowers the binary tree's cost; the 8-wide tree
+             * collapsed from it may give a little of that back. */
+            assert_true(ih.sah_cost <= 1.01 * im.sah_cost);
+            if ((kind == 0 || kind == 1) && leaf == 1)
+                assert_true(ih.sah_cost < im.sah_cost);
+            sc_hitrec *hm = malloc(sc.nrays * sizeof *hm), *hh = malloc(sc.nrays * sizeof *hh);
+            assert_non_null(hm);
+            assert_non_null(hh);
+            trace_all(med, &sc, hm);
+            trace_all(high, &sc, hh);
+            size_t diff = 0;
+            for (size_t i = 0; i < sc.nrays; i++)
+                diff += !same_hit(&hm[i], &hh[i]);
+            assert_int_equal(diff, 0);
+            check_result res;
+            check_against_oracle(&sc, hh, &res, sc.name);
+            assert_int_equal(res.bad, 0);
+            for (size_t i = 0; i < sc.nrays; i += 3) {
+                int occ = -1;
+                assert_int_equal(sc_trace_any(high, &sc.rays[i], &occ, NULL), SC_OK);
+                assert_int_equal(occ, hh[i].prim != SC_HITREC_MISS);
+            }
+            free(hm), free(hh);
+            sc_bvh_free(med);
+            sc_bvh_free(high);
+        }
+        scene_free(&sc);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -544,6 +644,7 @@ int main(void)
         cmocka_unit_test(test_moller),
         cmocka_unit_test(test_bunny),
         cmocka_unit_test(test_strided_layout),
+        cmocka_unit_test(test_quality_high),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -283,7 +283,8 @@ static void test_shared_bvh(void **state)
 
 /* A build on several threads (POSIX threads for large subtrees, and for
  * the subtrees of the collapse's write pass) is bit for bit the
- * single-threaded one: nodes, leaves, figures, in every leaf layout. Under
+ * single-threaded one: nodes, leaves, figures, in every leaf layout and
+ * with the high quality's reinsertion pass. Under
  * ThreadSanitizer this is also the race check of the parallel builder. */
 static void test_parallel_build(void **state)
 {
@@ -292,13 +293,15 @@ static void test_parallel_build(void **state)
     soup big;
     make_soup(77, BIG, 0.01, &big);
     const sc_mesh_view m = { big.pos, 3 * BIG, big.idx, BIG, 0, 0 };
-    const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_COMPACT };
-    for (int md = 0; md < 3; md++) {
+    const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_COMPACT,
+                                        SC_PREFILTER_OFF };
+    for (int md = 0; md < 4; md++) {
         sc_bvh *ref = NULL;
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
         assert_int_equal(cfg.threads, 1);
         cfg.prefilter = modes[md];
+        cfg.quality = md == 3 ? SC_BUILD_QUALITY_HIGH : SC_BUILD_QUALITY_MEDIUM;
         assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
         const int counts[] = { 2, 3, 0 };
         for (int c = 0; c < 3; c++) {

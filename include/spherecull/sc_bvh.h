@@ -78,6 +78,14 @@ typedef enum sc_tri_test {
     SC_TRI_TEST_COUNT
 } sc_tri_test;
 
+/* How hard the builder works for a tree that traces faster. */
+typedef enum sc_build_quality {
+    SC_BUILD_QUALITY_MEDIUM = 0,  /* binned SAH (32 bins by default) */
+    SC_BUILD_QUALITY_HIGH,        /* binned SAH, then reinsertion (Bittner et al. 2013): the inner
+                                     nodes rearranged for a lower SAH cost, at a longer build */
+    SC_BUILD_QUALITY_COUNT
+} sc_build_quality;
+
 typedef struct sc_bvh_config {
     int leaf_size;               /* 1..SC_BVH_MAX_LEAF: most triangles per leaf */
     sc_prefilter_mode prefilter;
@@ -87,6 +95,7 @@ typedef struct sc_bvh_config {
     int threads;                 /* build threads: 1 = the calling thread only (default),
                                     0 = one per online CPU, n = at most n; the tree is the
                                     same for every value */
+    sc_build_quality quality;    /* default SC_BUILD_QUALITY_MEDIUM */
 } sc_bvh_config;
 
 typedef struct sc_bvh_info {

@@ -18,31 +18,32 @@
 #endif
 
 static const sc_tracer_def all_tracers[] = {
-    { "spherecull-off", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0 },
-    { "spherecull-exact", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0 },
-    { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0 },
-    { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0 },
-    { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0 },
-    { "spherecull-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 0 },
-    { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8 },
-    { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16 },
-    { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16 },
-    { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16 },
-    { "spherecull-p16-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 16 },
-    { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM },
+    { "spherecull-off", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, 0 },
+    { "spherecull-exact", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0, 0 },
+    { "spherecull-high", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_HIGH },
+    { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0, 0 },
+    { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0, 0 },
+    { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0, 0 },
+    { "spherecull-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 0, 0 },
+    { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8, 0 },
+    { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16, 0 },
+    { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16, 0 },
+    { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16, 0 },
+    { "spherecull-p16-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 16, 0 },
+    { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM, 0 },
 #ifdef SC_HAVE_EMBREE
-    { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
-    { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
-    { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0 },
-    { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0 },
-    { "embree-compact", SC_TRACER_EMBREE, SC_EMBREE_COMPACT, SC_EMBREE_QUALITY_MEDIUM, 0, 0 },
-    { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8 },
-    { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16 },
-    { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM },
-    { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
-    { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
-    { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0 },
-    { "embree-user-plain16", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0 },
+    { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
+    { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
+    { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0, 0 },
+    { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0, 0 },
+    { "embree-compact", SC_TRACER_EMBREE, SC_EMBREE_COMPACT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
+    { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0 },
+    { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0 },
+    { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM, 0 },
+    { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0 },
+    { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0 },
+    { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0 },
+    { "embree-user-plain16", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0 },
 #endif
 };
 enum { NDEFS = sizeof all_tracers / sizeof all_tracers[0] };
@@ -87,7 +88,7 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
         return SC_ERR_INVALID_ARGUMENT;
     const sc_mesh_view *m = &cm->view;
     memset(t, 0, sizeof *t);
-    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0 };
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality };
     sc_bvh *b;
     sc_status st = sc_bvh_build(m, cfg, &b);
     if (st != SC_OK)
@@ -106,7 +107,7 @@ sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh
     if (!t || !cfg || !v)
         return SC_ERR_INVALID_ARGUMENT;
     memset(t, 0, sizeof *t);
-    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0 };
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality };
     t->instanced = 1;
     sc_scene_accel *a;
     sc_status st = sc_scene_accel_build(v, cfg, &a);
@@ -149,6 +150,7 @@ static sc_status tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_c
         sc_bvh_config_default(&cfg);
         cfg.prefilter = (sc_prefilter_mode)def->mode;
         cfg.tri_test = (sc_tri_test)def->quality;
+        cfg.quality = (sc_build_quality)def->build;
         cfg.threads = 0;      /* every CPU, as Embree's build (build_threads 0) */
         sc_status st = sc_tracer_build_bvh(t, def->name, &cfg, cm);
         t->def.packet = def->packet;
@@ -214,6 +216,7 @@ static sc_status tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, cons
         sc_bvh_config_default(&cfg);
         cfg.prefilter = (sc_prefilter_mode)def->mode;
         cfg.tri_test = (sc_tri_test)def->quality;
+        cfg.quality = (sc_build_quality)def->build;
         cfg.threads = 0;
         sc_status st = sc_tracer_build_scene_bvh(t, def->name, &cfg, v);
         t->def.packet = def->packet;

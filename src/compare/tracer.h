@@ -28,6 +28,7 @@ typedef struct sc_tracer_def {
     int quality;       /* sc_tri_test (ours) or sc_embree_quality */
     int cluster;       /* Embree user modes: triangles per cluster; 0 = default */
     int packet;        /* 0 (single rays), 8 or 16; ours also SC_TRACER_STREAM */
+    int build;         /* ours: sc_build_quality */
 } sc_tracer_def;
 
 /* Work counted inside a tracer; Embree counts only in its user modes. */
