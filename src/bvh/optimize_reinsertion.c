@@ -168,6 +168,15 @@ static int depth_unless_below(const ropt *R, uint32_t i, uint32_t x)
     return i == x ? -1 : d;
 }
 
+/* 1 if a is x or one of its ancestors. */
+static int on_path_up(const ropt *R, uint32_t x, uint32_t a)
+{
+    for (; x != NONE; x = R->parent[x])
+        if (x == a)
+            return 1;
+    return 0;
+}
+
 /* Moves x below a new inner node in the place of `to`: x's parent P takes
  * its other child's content, whose slot holds `to`'s content, and `to`'s
  * slot becomes the inner node (x, that slot). */
@@ -296,9 +305,11 @@ int sc_reinsertion_optimize(sc_bnode *bn, uint32_t root, size_t slots, const sc_
                 continue;
             if (to == S || to == P)
                 continue;
+            /* An earlier move of this round may have put `to` below x or
+             * above it; either would tie the tree into a loop. */
             const int dt = depth_unless_below(&R, to, x);
             const int hx = R.height[x], ht = R.height[to];
-            if (dt < 0 || dt + 1 + (hx > ht ? hx : ht) > SC_BVH_MAX_DEPTH - 1)
+            if (dt < 0 || on_path_up(&R, x, to) || dt + 1 + (hx > ht ? hx : ht) > SC_BVH_MAX_DEPTH - 1)
                 continue;
             touched[x] = touched[to] = touched[S] = touched[P] = 1;
             if (Pt != NONE)
