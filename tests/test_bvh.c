@@ -631,6 +631,43 @@ static void test_quality_high(void **state)
     }
 }
 
+/* Many small soups with leaves of one and two triangles: the reinsertion
+ * pass makes many moves per round there, and every resulting tree must
+ * still be a tree that finds the medium tree's hits. */
+static void test_quality_high_soups(void **state)
+{
+    (void)state;
+    for (int seed = 0; seed < 24; seed++) {
+        scene_case sc = { .name = "small soup" };
+        scene_soup(&sc.m, 100 + 70 * (size_t)seed, 0, 100 + (uint64_t)seed);
+        make_rays(&sc, 3000, 200 + (uint64_t)seed);
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.leaf_size = 1 + seed % 2;
+        const sc_mesh_view mv = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
+        sc_bvh *med = NULL, *high = NULL;
+        assert_int_equal(sc_bvh_build(&mv, &cfg, &med), SC_OK);
+        cfg.quality = SC_BUILD_QUALITY_HIGH;
+        assert_int_equal(sc_bvh_build(&mv, &cfg, &high), SC_OK);
+        for (size_t i = 0; i < sc.nrays; i++) {
+            sc_hitrec a, b;
+            assert_int_equal(sc_trace_closest(med, &sc.rays[i], &a, NULL), SC_OK);
+            assert_int_equal(sc_trace_closest(high, &sc.rays[i], &b, NULL), SC_OK);
+            assert_true(same_hit(&a, &b));
+            int occ = -1;
+            assert_int_equal(sc_trace_any(high, &sc.rays[i], &occ, NULL), SC_OK);
+            assert_int_equal(occ, a.prim != SC_HITREC_MISS);
+        }
+        sc_bvh_info im, ih;
+        sc_bvh_get_info(med, &im);
+        sc_bvh_get_info(high, &ih);
+        assert_int_equal(ih.leaves, im.leaves);
+        sc_bvh_free(med);
+        sc_bvh_free(high);
+        scene_free(&sc);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -645,6 +682,7 @@ int main(void)
         cmocka_unit_test(test_bunny),
         cmocka_unit_test(test_strided_layout),
         cmocka_unit_test(test_quality_high),
+        cmocka_unit_test(test_quality_high_soups),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
