@@ -37,6 +37,12 @@ typedef struct bvh_builder {
 
 #define SC_COLLAPSE_JOB_DEPTH 3
 
+/* Runs fn(arg) on the calling thread and on up to threads - 1 (and at most
+ * extra) POSIX threads of its own, and joins them: the build steps' shared
+ * pool. fn takes work from arg until none is left; if a thread cannot be
+ * started the others do its share. */
+void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t extra);
+
 /* Writes the subtrees the write pass deferred, on up to `threads` threads. */
 void sc_collapse_jobs(bvh_builder *B, int threads);
 

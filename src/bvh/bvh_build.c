@@ -3,8 +3,9 @@
  * the 8-wide layout (collapse_bvh8.c) whose leaves leaf_triangles.c
  * encodes; then the handle's lifecycle, its figures and the names of the
  * config's enums. */
-#define _POSIX_C_SOURCE 200809L   /* sysconf */
+#define _POSIX_C_SOURCE 200809L   /* sysconf, POSIX threads */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -28,6 +29,20 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
     cfg->traversal_cost = 2.0f;
     cfg->threads = 1;
     cfg->quality = SC_BUILD_QUALITY_MEDIUM;
+}
+
+void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t extra)
+{
+    pthread_t th[SC_BVH_MAX_THREADS];
+    int started = 0;
+    for (int i = 1; i < threads && (size_t)i <= extra; i++) {
+        if (pthread_create(&th[started], NULL, fn, arg) != 0)
+            break;
+        started++;
+    }
+    fn(arg);
+    for (int i = 0; i < started; i++)
+        pthread_join(th[i], NULL);
 }
 
 static void *alloc_aligned(size_t bytes)

@@ -2,9 +2,7 @@
  * repeatedly opening the child with the largest surface area, as Embree's
  * BVH8 builder does. Runs twice with the same order: once to measure
  * (B->dry), once to write. */
-#define _POSIX_C_SOURCE 200809L
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <string.h>
 
@@ -121,14 +119,5 @@ void sc_collapse_jobs(bvh_builder *B, int threads)
     atomic_size_t next;
     atomic_init(&next, 0);
     collapse_worker w = { B, &next };
-    pthread_t th[SC_BVH_MAX_THREADS];
-    int started = 0;
-    for (int i = 1; i < threads && (size_t)i < B->njobs; i++) {
-        if (pthread_create(&th[started], NULL, collapse_work, &w) != 0)
-            break;      /* fewer threads: the caller does the rest */
-        started++;
-    }
-    collapse_work(&w);
-    for (int i = 0; i < started; i++)
-        pthread_join(th[i], NULL);
+    sc_build_run_workers(collapse_work, &w, threads, B->njobs ? B->njobs - 1 : 0);
 }

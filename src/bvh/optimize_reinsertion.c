@@ -12,8 +12,6 @@
  * would hang a subtree below itself, or one that would make the tree deeper
  * than the traversal stacks allow. Everything is ordered by (value, index),
  * so the tree does not depend on anything but the input. */
-#define _POSIX_C_SOURCE 200809L
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -230,16 +228,7 @@ static void search_all(const ropt *R, const cand *c, size_t k, move *found, int 
 {
     search_job j = { R, c, found, k, 0 };
     atomic_init(&j.next, 0);
-    pthread_t th[SC_BVH_MAX_THREADS];
-    int started = 0;
-    for (int t = 1; t < threads && (size_t)t * 256 < k; t++) {
-        if (pthread_create(&th[started], NULL, search_work, &j) != 0)
-            break;
-        started++;
-    }
-    search_work(&j);
-    for (int t = 0; t < started; t++)
-        pthread_join(th[t], NULL);
+    sc_build_run_workers(search_work, &j, threads, k / 256);
 }
 
 int sc_reinsertion_optimize(sc_bnode *bn, uint32_t root, size_t slots, const sc_reinsertion_params *p)
