@@ -7,6 +7,10 @@
 #include "build_binned_sah.h"
 #include "bvh_internal.h"
 
+/* The 8-wide nodes at depth 3 (the root is 1): at most 8 x 8 of them. */
+#define SC_COLLAPSE_JOB_DEPTH 3
+#define SC_COLLAPSE_JOBS (SC_BVH_N * SC_BVH_N)
+
 typedef struct bvh_builder {
     const sc_bvh_config *cfg;
     const sc_mesh_view *meshes;  /* the build input: one or more meshes */
@@ -32,10 +36,8 @@ typedef struct bvh_builder {
         uint32_t kids[2];
         int nk;
         size_t node_in, leaf_in, node_out, leaf_out;
-    } jobs[64];
+    } jobs[SC_COLLAPSE_JOBS];
 } bvh_builder;
-
-#define SC_COLLAPSE_JOB_DEPTH 3
 
 /* Runs fn(arg) on the calling thread and on up to threads - 1 (and at most
  * extra) POSIX threads of its own, and joins them: the build steps' shared

@@ -8,27 +8,30 @@
 
 #include "build_internal.h"
 
+static uint64_t collapse_node(bvh_builder *B, const uint32_t *kids_in, int nk_in, int depth);
+
 uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids_in, int nk_in, int depth)
 {
-    if (depth == SC_COLLAPSE_JOB_DEPTH && (B->record || B->defer)) {
-        if (B->defer && B->next_job < B->njobs) {
-            /* the subtree the measuring pass recorded as this one */
-            const struct collapse_job *j = &B->jobs[B->next_job++];
-            B->node_used = j->node_out, B->leaf_used = j->leaf_out;
-            return (uint64_t)(j->node_in * sizeof(sc_bvh_node8));
-        }
-        if (B->njobs < sizeof B->jobs / sizeof B->jobs[0]) {
-            struct collapse_job *j = &B->jobs[B->njobs++];
-            memcpy(j->kids, kids_in, sizeof(uint32_t) * (size_t)nk_in);
-            j->nk = nk_in;
-            j->node_in = B->node_used, j->leaf_in = B->leaf_used;
-            B->record = 0;
-            uint64_t ref = sc_collapse_bvh8(B, kids_in, nk_in, depth);
-            B->record = 1;
-            j->node_out = B->node_used, j->leaf_out = B->leaf_used;
-            return ref;
-        }
+    if (depth == SC_COLLAPSE_JOB_DEPTH && B->defer && B->next_job < B->njobs) {
+        /* the subtree the measuring pass recorded as this one */
+        const struct collapse_job *j = &B->jobs[B->next_job++];
+        B->node_used = j->node_out, B->leaf_used = j->leaf_out;
+        return (uint64_t)(j->node_in * sizeof(sc_bvh_node8));
     }
+    if (depth == SC_COLLAPSE_JOB_DEPTH && B->record && B->njobs < SC_COLLAPSE_JOBS) {
+        struct collapse_job *j = &B->jobs[B->njobs++];
+        memcpy(j->kids, kids_in, sizeof(uint32_t) * (size_t)nk_in);
+        j->nk = nk_in;
+        j->node_in = B->node_used, j->leaf_in = B->leaf_used;
+        const uint64_t ref = collapse_node(B, kids_in, nk_in, depth);
+        j->node_out = B->node_used, j->leaf_out = B->leaf_used;
+        return ref;
+    }
+    return collapse_node(B, kids_in, nk_in, depth);
+}
+
+static uint64_t collapse_node(bvh_builder *B, const uint32_t *kids_in, int nk_in, int depth)
+{
     uint32_t kids[SC_BVH_N];
     int nk = nk_in;
     memcpy(kids, kids_in, sizeof(uint32_t) * (size_t)nk);

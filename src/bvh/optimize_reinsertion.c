@@ -292,7 +292,7 @@ int sc_reinsertion_optimize(sc_bnode *bn, uint32_t root, size_t slots, const sc_
             const uint32_t P = R.parent[x], S = sibling_of(&R, x), Pt = R.parent[to];
             if (touched[x] || touched[to] || touched[S] || touched[P] || (Pt != NONE && touched[Pt]))
                 continue;
-            if (to == S || to == P)
+            if (to == S)
                 continue;
             /* An earlier move of this round may have put `to` below x or
              * above it; either would tie the tree into a loop. */
