@@ -17,6 +17,7 @@
 #include "bvh/bvh_internal.h"
 #include "common/sc_clock.h"
 #include "common/sc_grow.h"
+#include "common/sc_mem.h"
 #include "spherecull/sc_accel.h"
 #include "isa/isa_dispatch.h"
 #include "trace/trace_top.h"
@@ -347,7 +348,7 @@ static sc_status build_top(sc_accel *a)
     box3 *boxes = malloc(nitems * sizeof *boxes);
     uint32_t *ids = malloc(nitems * sizeof *ids);
     sc_bnode *bn = malloc((2 * nitems + 1) * sizeof *bn);
-    sc_bvh_node8 *nodes = aligned_alloc(64, (nitems + 1) * sizeof(sc_bvh_node8));
+    sc_bvh_node8 *nodes = sc_alloc_large((nitems + 1) * sizeof(sc_bvh_node8));
     a->items = malloc(nitems * sizeof *a->items);
     sc_status st = SC_ERR_OUT_OF_MEMORY;
     if (!boxes || !ids || !bn || !nodes || !a->items) {

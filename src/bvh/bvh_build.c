@@ -13,6 +13,7 @@
 #include "build_internal.h"
 #include "optimize_reinsertion.h"
 #include "common/sc_clock.h"
+#include "common/sc_mem.h"
 #include "common/sc_names.h"
 
 void sc_bvh_config_default(sc_bvh_config *cfg)
@@ -43,12 +44,6 @@ void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t ex
     fn(arg);
     for (int i = 0; i < started; i++)
         pthread_join(th[i], NULL);
-}
-
-static void *alloc_aligned(size_t bytes)
-{
-    size_t n = (bytes + 63) / 64 * 64;
-    return aligned_alloc(64, n ? n : 64);
 }
 
 sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc_bvh **out)
@@ -212,8 +207,8 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
             }
             if (pass == 0) {
                 measured = B;
-                bvh->nodes = alloc_aligned(B.node_used * sizeof(sc_bvh_node8));
-                bvh->leaves = alloc_aligned(B.leaf_used);
+                bvh->nodes = sc_alloc_large(B.node_used * sizeof(sc_bvh_node8));
+                bvh->leaves = sc_alloc_large(B.leaf_used);
                 if (!bvh->nodes || !bvh->leaves)
                     goto fail;
                 memset(bvh->leaves, 0, (B.leaf_used + 63) / 64 * 64);
