@@ -1,16 +1,18 @@
 /* Binned SAH (Wald 2007) over boxes and centres: the builder knows nothing
  * of triangles (the madmann91/bvh way), so any primitive with a box can use
- * it. Subtrees of large ranges are built on POSIX threads (in glibc's libc
- * itself), up to the thread budget; the tree does not depend on it. Not C11
- * thrd_create: ThreadSanitizer does not intercept it and cannot check it. */
+ * it. Subtrees of large ranges are tasks for a pool of POSIX threads (in
+ * glibc's libc itself); the tree does not depend on which thread builds
+ * what. Not C11 thrd_create: ThreadSanitizer does not intercept it and
+ * cannot check it. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <pthread.h>
-#include <stdatomic.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "box3.h"
 #include "build_binned_sah.h"
+#include "build_internal.h"
 
 /* A box in four lanes (x, y, z, unused) for the inner loops: two min/max
  * instead of six compares per grow. vbox_grow is box_grow's compare lane
@@ -90,13 +92,23 @@ static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1
  * and the binary depth stays below SC_BVH_MAX_DEPTH. */
 #define MEDIAN_DEPTH 32
 
+struct subtree_job;
+
 typedef struct sah_builder {
     box3 *pbox;              /* pbox[i]: the box of ids[i] */
     uint32_t *ids;
     sc_bnode *nodes;
     int max_leaf, bins;
     float traversal_cost;
-    atomic_int spare;        /* threads that may still be started */
+    /* The task pool (threads > 1): subtrees of at least
+     * SC_SAH_PARALLEL_MIN primitives wait in a queue, oldest (largest)
+     * first, for whichever thread is free; `unfinished` counts the tasks
+     * queued or running. */
+    int pool;
+    pthread_mutex_t lock;
+    pthread_cond_t wake;
+    struct subtree_job *queue;
+    size_t head, tail, unfinished;
 } sah_builder;
 
 /* The boxes move with their ids: every pass over a range reads two
@@ -147,17 +159,48 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
                         box3 cb);
 
 typedef struct subtree_job {
-    sah_builder *B;
     size_t begin, end;
     int depth;
     uint32_t me;
     box3 bounds, cb;
 } subtree_job;
 
-static void *subtree_thread(void *arg)
+/* At most this many tasks are ever queued for n primitives: a task is
+ * queued by a range of at least SC_SAH_PARALLEL_MIN primitives; the ranges
+ * of one tree level are disjoint, so a level has at most
+ * n / SC_SAH_PARALLEL_MIN of them, and such ranges occur on at most
+ * MEDIAN_DEPTH SAH levels plus 32 levels of median splits below them. */
+static size_t max_tasks(size_t n)
 {
-    subtree_job *j = arg;
-    build_range(j->B, j->begin, j->end, j->depth, j->me, j->bounds, j->cb);
+    return 2 * (n / SC_SAH_PARALLEL_MIN) * (MEDIAN_DEPTH + 32) + 1;
+}
+
+static void push_task(sah_builder *B, const subtree_job *j)
+{
+    pthread_mutex_lock(&B->lock);
+    B->queue[B->tail++] = *j;
+    B->unfinished++;
+    pthread_cond_signal(&B->wake);
+    pthread_mutex_unlock(&B->lock);
+}
+
+static void *pool_worker(void *arg)
+{
+    sah_builder *B = arg;
+    pthread_mutex_lock(&B->lock);
+    for (;;) {
+        while (B->head == B->tail && B->unfinished > 0)
+            pthread_cond_wait(&B->wake, &B->lock);
+        if (B->head == B->tail)
+            break;                                  /* no task queued or running: done */
+        const subtree_job j = B->queue[B->head++];
+        pthread_mutex_unlock(&B->lock);
+        build_range(B, j.begin, j.end, j.depth, j.me, j.bounds, j.cb);
+        pthread_mutex_lock(&B->lock);
+        if (--B->unfinished == 0)
+            pthread_cond_broadcast(&B->wake);
+    }
+    pthread_mutex_unlock(&B->lock);
     return NULL;
 }
 
@@ -172,16 +215,6 @@ static void range_bounds(const sah_builder *B, size_t begin, size_t end, box3 *b
     }
     *bounds = vbox_box(b);
     *cb = vbox_box(c);
-}
-
-/* One more thread for a subtree, if the budget allows; 1 if taken. */
-static int take_thread(sah_builder *B)
-{
-    int n = atomic_load(&B->spare);
-    while (n > 0)
-        if (atomic_compare_exchange_weak(&B->spare, &n, n - 1))
-            return 1;
-    return 0;
 }
 
 /* bounds, cb: the box of ids[begin..end) and of their centres (the parent
@@ -329,31 +362,40 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
     }
     const uint32_t l = me + 1, r = me + 2 * (uint32_t)(mid - begin);
     node->leaf = 0, node->a = l, node->b = r;
-    /* Large subtrees: the left one on another thread when the budget has
-     * one; the two write disjoint id ranges and node ranges. */
-    pthread_t th;
-    subtree_job job = { B, begin, mid, depth + 1, l, lb, lcb };
-    int took = n >= SC_SAH_PARALLEL_MIN && take_thread(B);
-    int spawned = took && pthread_create(&th, NULL, subtree_thread, &job) == 0;
-    if (took && !spawned)
-        atomic_fetch_add(&B->spare, 1);     /* no thread after all: give it back */
-    if (!spawned)
+    /* Large subtrees: the left one a task for the pool; the two write
+     * disjoint id ranges and node ranges. */
+    if (B->pool && n >= SC_SAH_PARALLEL_MIN) {
+        const subtree_job job = { begin, mid, depth + 1, l, lb, lcb };
+        push_task(B, &job);
+    } else {
         build_range(B, begin, mid, depth + 1, l, lb, lcb);
-    build_range(B, mid, end, depth + 1, r, rb, rcb);
-    if (spawned) {
-        pthread_join(th, NULL);
-        atomic_fetch_add(&B->spare, 1);
     }
+    build_range(B, mid, end, depth + 1, r, rb, rcb);
 }
 
 uint32_t sc_build_binned_sah(box3 *boxes, uint32_t *ids, size_t n, const sc_sah_params *p, sc_bnode *nodes,
                              size_t *node_count)
 {
-    sah_builder B = { boxes, ids, nodes, p->max_leaf, p->bins, p->traversal_cost, 0 };
-    atomic_init(&B.spare, p->threads > 1 ? p->threads - 1 : 0);
+    sah_builder B;
+    memset(&B, 0, sizeof B);
+    B.pbox = boxes, B.ids = ids, B.nodes = nodes;
+    B.max_leaf = p->max_leaf, B.bins = p->bins, B.traversal_cost = p->traversal_cost;
     box3 bounds, cb;
     range_bounds(&B, 0, n, &bounds, &cb);
-    build_range(&B, 0, n, 0, 0, bounds, cb);
+    const subtree_job root = { 0, n, 0, 0, bounds, cb };
+    if (p->threads > 1 && n >= SC_SAH_PARALLEL_MIN && (B.queue = malloc(sizeof(subtree_job) * max_tasks(n)))) {
+        B.pool = 1;
+        pthread_mutex_init(&B.lock, NULL);
+        pthread_cond_init(&B.wake, NULL);
+        B.queue[B.tail++] = root;
+        B.unfinished = 1;
+        sc_build_run_workers(pool_worker, &B, p->threads, (size_t)p->threads);
+        pthread_mutex_destroy(&B.lock);
+        pthread_cond_destroy(&B.wake);
+        free(B.queue);
+    } else {
+        build_range(&B, 0, n, 0, 0, bounds, cb);   /* one thread, or no memory for the queue */
+    }
     *node_count = 2 * n - 1;
     return 0;
 }

@@ -24,7 +24,7 @@ typedef struct sc_sah_params {
     int threads;             /* most threads building at once (>= 1; the caller's included) */
 } sc_sah_params;
 
-/* Ranges smaller than this are not worth a thread. */
+/* Ranges smaller than this are not worth a task for another thread. */
 #define SC_SAH_PARALLEL_MIN 65536
 
 /* boxes[i] is the box of ids[i] (finite; its centre, by which it is

@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L   /* sysconf, POSIX threads */
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -44,6 +45,46 @@ void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t ex
     fn(arg);
     for (int i = 0; i < started; i++)
         pthread_join(th[i], NULL);
+}
+
+/* The triangles' boxes, BOX_CHUNK at a time from a shared counter. */
+#define BOX_CHUNK 65536
+typedef struct box_job {
+    const bvh_builder *B;
+    box3 *pbox;
+    uint32_t *ids;           /* t, or UINT32_MAX for a triangle with a non-finite vertex */
+    size_t n;
+    atomic_size_t *next, *skipped;
+} box_job;
+
+static void *box_work(void *arg)
+{
+    box_job *j = arg;
+    for (;;) {
+        const size_t begin = atomic_fetch_add(j->next, BOX_CHUNK);
+        if (begin >= j->n)
+            return NULL;
+        const size_t end = j->n - begin < BOX_CHUNK ? j->n : begin + BOX_CHUNK;
+        size_t bad = 0;
+        for (size_t t = begin; t < end; t++) {
+            box3 b;
+            box_empty(&b);
+            int finite = 1;
+            for (int corner = 0; corner < 3; corner++) {
+                const float *p = vtx(j->B, (uint32_t)t, corner);
+                for (int k = 0; k < 3; k++) {
+                    finite &= isfinite(p[k]) != 0;
+                    b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
+                    b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
+                }
+            }
+            j->pbox[t] = b;
+            j->ids[t] = finite ? (uint32_t)t : UINT32_MAX;
+            bad += !finite;
+        }
+        if (bad)
+            atomic_fetch_add(j->skipped, bad);
+    }
 }
 
 sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc_bvh **out)
@@ -132,34 +173,33 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     bvh->mesh_count = mesh_count;
     first = NULL;
 
-    size_t used = 0;
-    for (size_t t = 0; t < n; t++) {
-        box3 b;
-        box_empty(&b);
-        int finite = 1;
-        for (int corner = 0; corner < 3; corner++) {
-            const float *p = vtx(&B, (uint32_t)t, corner);
-            for (int k = 0; k < 3; k++) {
-                finite &= isfinite(p[k]) != 0;
-                b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
-                b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
+    int threads = cfg.threads;
+    if (threads == 0) {
+        long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = cpus < 1 ? 1 : cpus > SC_BVH_MAX_THREADS ? SC_BVH_MAX_THREADS : (int)cpus;
+    }
+    /* Every triangle's box at its own index, in chunks on the threads; a
+     * triangle with a non-finite vertex is marked and then left out (the
+     * others keep their order). */
+    atomic_size_t next, skipped;
+    atomic_init(&next, 0);
+    atomic_init(&skipped, 0);
+    box_job bj = { &B, pbox, ids, n, &next, &skipped };
+    sc_build_run_workers(box_work, &bj, n >= SC_SAH_PARALLEL_MIN ? threads : 1, n / BOX_CHUNK);
+    size_t used = n;
+    if (atomic_load(&skipped)) {
+        used = 0;
+        for (size_t t = 0; t < n; t++)
+            if (ids[t] != UINT32_MAX) {
+                pbox[used] = pbox[t];
+                ids[used++] = (uint32_t)t;
             }
-        }
-        if (!finite)
-            continue;
-        pbox[used] = b;
-        ids[used++] = (uint32_t)t;
     }
     bvh->triangles = used;
     bvh->skipped = n - used;
 
     size_t root_nodes = 0;
     if (used) {
-        int threads = cfg.threads;
-        if (threads == 0) {
-            long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-            threads = cpus < 1 ? 1 : cpus > SC_BVH_MAX_THREADS ? SC_BVH_MAX_THREADS : (int)cpus;
-        }
         const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost, threads };
         size_t bn_count;
         uint32_t root = sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
