@@ -247,11 +247,16 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
             }
             if (pass == 0) {
                 measured = B;
-                bvh->nodes = sc_alloc_large(B.node_used * sizeof(sc_bvh_node8));
-                bvh->leaves = sc_alloc_large(B.leaf_used);
-                if (!bvh->nodes || !bvh->leaves)
+                /* Nodes and leaves in one block: a tree of 2 MiB or more
+                 * gets huge pages for its nodes too (sc_mem.h). */
+                const size_t node_bytes = B.node_used * sizeof(sc_bvh_node8);
+                const size_t leaf_bytes = (B.leaf_used + 63) / 64 * 64;
+                unsigned char *block = sc_alloc_large(node_bytes + leaf_bytes);
+                if (!block)
                     goto fail;
-                memset(bvh->leaves, 0, (B.leaf_used + 63) / 64 * 64);
+                bvh->nodes = (sc_bvh_node8 *)(void *)block;
+                bvh->leaves = block + node_bytes;
+                memset(bvh->leaves, 0, leaf_bytes);
             }
         }
         root_nodes = B.node_used;
@@ -286,8 +291,7 @@ void sc_bvh_free(sc_bvh *bvh)
 {
     if (!bvh)
         return;
-    free(bvh->nodes);
-    free(bvh->leaves);
+    free(bvh->nodes);         /* and the leaves, in the same block */
     free(bvh->first);
     free(bvh);
 }

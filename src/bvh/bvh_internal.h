@@ -14,7 +14,7 @@
 
 struct sc_bvh {
     sc_bvh_node8 *nodes;         /* the root is nodes[0] (always an inner node) */
-    unsigned char *leaves;
+    unsigned char *leaves;       /* in the nodes' block, after them */
     int has_root;                /* 0: no triangles, every ray misses */
     float root_lo[3], root_hi[3];
     size_t node_count, leaf_count, leaf_bytes, sphere_bytes, leaves_with_spheres;
