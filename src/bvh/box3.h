@@ -24,6 +24,14 @@ static inline void box_grow(box3 *b, const box3 *o)
     }
 }
 
+static inline void box_grow_point(box3 *b, const float p[3])
+{
+    for (int k = 0; k < 3; k++) {
+        b->lo[k] = p[k] < b->lo[k] ? p[k] : b->lo[k];
+        b->hi[k] = p[k] > b->hi[k] ? p[k] : b->hi[k];
+    }
+}
+
 static inline float box_area(const box3 *b)
 {
     float d[3];

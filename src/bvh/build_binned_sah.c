@@ -172,7 +172,7 @@ typedef struct subtree_job {
  * MEDIAN_DEPTH SAH levels plus 32 levels of median splits below them. */
 static size_t max_tasks(size_t n)
 {
-    return 2 * (n / SC_SAH_PARALLEL_MIN) * (MEDIAN_DEPTH + 32) + 1;
+    return (n / SC_SAH_PARALLEL_MIN) * (MEDIAN_DEPTH + 32) + 1;
 }
 
 static void push_task(sah_builder *B, const subtree_job *j)

@@ -72,11 +72,8 @@ static void *box_work(void *arg)
             int finite = 1;
             for (int corner = 0; corner < 3; corner++) {
                 const float *p = vtx(j->B, (uint32_t)t, corner);
-                for (int k = 0; k < 3; k++) {
-                    finite &= isfinite(p[k]) != 0;
-                    b.lo[k] = p[k] < b.lo[k] ? p[k] : b.lo[k];
-                    b.hi[k] = p[k] > b.hi[k] ? p[k] : b.hi[k];
-                }
+                finite &= isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+                box_grow_point(&b, p);
             }
             j->pbox[t] = b;
             j->ids[t] = finite ? (uint32_t)t : UINT32_MAX;

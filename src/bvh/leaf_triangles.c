@@ -233,13 +233,8 @@ void sc_leaf_refit(const bvh_builder *B, uint64_t ref, box3 *box)
     sc_bnode leaf = { .a = 0, .b = n, .leaf = 1 };
     box_empty(&leaf.box);
     for (unsigned i = 0; i < n; i++)
-        for (int corner = 0; corner < 3; corner++) {
-            const float *p = vtx(&L, ids[i], corner);
-            for (int k = 0; k < 3; k++) {
-                leaf.box.lo[k] = p[k] < leaf.box.lo[k] ? p[k] : leaf.box.lo[k];
-                leaf.box.hi[k] = p[k] > leaf.box.hi[k] ? p[k] : leaf.box.hi[k];
-            }
-        }
+        for (int corner = 0; corner < 3; corner++)
+            box_grow_point(&leaf.box, vtx(&L, ids[i], corner));
     if (sc_ref_has_spheres(ref))
         leaf_spheres(&L, &leaf, B->cfg->prefilter == SC_PREFILTER_CIRCUM ? SC_SPHERE_CIRCUM : SC_SPHERE_MINIMAL,
                      W, block);

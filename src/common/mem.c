@@ -10,7 +10,9 @@
 
 void *sc_alloc_large(size_t bytes)
 {
-    if (bytes >= SC_HUGE_PAGE && bytes <= SIZE_MAX - SC_HUGE_PAGE) {
+    if (bytes > SIZE_MAX - SC_HUGE_PAGE)
+        return NULL;                          /* no rounding up without overflow */
+    if (bytes >= SC_HUGE_PAGE) {
         const size_t n = (bytes + SC_HUGE_PAGE - 1) & ~(SC_HUGE_PAGE - 1);
         void *p = aligned_alloc(SC_HUGE_PAGE, n);
         if (!p)
