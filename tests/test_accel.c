@@ -23,6 +23,7 @@
 #include "sc_test_meshes.h"
 #include "spherecull/sc_accel.h"
 #include "spherecull/sc_bvh.h"
+#include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
 
 static uint64_t rng_state = 0x1234567ull;
@@ -808,6 +809,209 @@ static void test_errors(void **state)
     mesh_free(&tor);
 }
 
+/* ---- packets and streams through instances ------------------------------- */
+
+/* Camera rays in 4x4 pixel tiles (16 consecutive rays, the packets and
+ * the streams' coherent runs), then rays from make_rays (incoherent). */
+static void packet_rays(sc_ray *rays, size_t ncam, size_t n, const float *aim, size_t naim)
+{
+    const float eye[3] = { 0.5f, 0.5f, 11 };
+    const int side = 4 * (int)sqrt((double)ncam / 16);
+    size_t r = 0;
+    for (int ty = 0; ty < side; ty += 4)
+        for (int tx = 0; tx < side; tx += 4)
+            for (int j = 0; j < 16 && r < ncam; j++, r++) {
+                /* the first half wide (the packet is wide next to each
+                 * instance), the second narrow (a packet through them) */
+                const float fov = r < ncam / 2 ? 0.9f : 0.06f;
+                const float px = (float)(tx + j % 4) / (float)side - 0.5f, py = (float)(ty + j / 4) / (float)side - 0.5f;
+                sc_ray q = { { eye[0], eye[1], eye[2] }, 0, { fov * px, fov * py, -1 }, INFINITY };
+                if (r % 23 == 5)
+                    q.tmax = 10;   /* ends inside the scene */
+                if (r % 29 == 7)
+                    q.tmin = 9;
+                rays[r] = q;
+            }
+    const float lo[3] = { -8, -8, -8 }, hi[3] = { 8, 8, 8 };
+    make_rays(rays + r, n - r, lo, hi, aim, naim);
+}
+
+static void test_packets(void **state)
+{
+    (void)state;
+    mesh tor, box, ground;
+    const double o0[3] = { 0, 0, 0 };
+    torus(&tor, 20, 10, o0, 1.0);
+    grid_box(&box, 4, 0);
+    grid_box(&ground, 8, 0);
+    const size_t NCAM = 1024, N = 2048;
+    sc_ray *rays = malloc(N * sizeof *rays);
+    packet_rays(rays, NCAM, N, tor.pos, tor.nv);
+    sc_hitrec *want = malloc(N * sizeof *want), *got = malloc(2 * N * sizeof *got);
+    int32_t *want_occ = malloc(N * sizeof *want_occ), *got_occ = malloc(3 * N * sizeof *got_occ);
+    const sc_isa start = sc_isa_active();
+    for (int cfgi = 0; cfgi < 3; cfgi++) {
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        cfg.tri_test = cfgi == 1 ? SC_TRI_EXACT : SC_TRI_WATERTIGHT;
+        cfg.prefilter = cfgi == 2 ? SC_PREFILTER_CIRCUM : cfgi == 1 ? SC_PREFILTER_COMPACT : SC_PREFILTER_OFF;
+        sc_accel *obj, *world, *flat;
+        assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+        const sc_mesh_view vt = { tor.pos, tor.nv, tor.idx, tor.nt, 0, 0 }, vb = { box.pos, box.nv, box.idx, box.nt, 0, 0 },
+                           vg = { ground.pos, ground.nv, ground.idx, ground.nt, 0, 0 };
+        assert_int_equal(sc_accel_attach_mesh(obj, &vt, SC_ACCEL_COPY, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(obj, &vb, SC_ACCEL_COPY, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(obj), SC_OK);
+        assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+        float x0[12];
+        for (int i = 0; i < NINST; i++) {
+            float x[12];
+            if (i % 4 == 2)
+                aligned_xfm(x, rnd_in(0.3, 2), i % 8 == 2, 6);
+            else
+                random_xfm(x, rnd_in(0.3, 2), i % 3 ? 1 : 3, i % 4 == 1, 6);
+            if (i == 0)
+                x[3] = x[7] = 0, memcpy(x0, x, sizeof x);   /* in front of the camera */
+            assert_int_equal(sc_accel_attach_instance(world, obj, x, NULL), SC_OK);
+        }
+        /* two more copies of instance 0: every hit on it is a three-way
+         * tie at equal t, which instance 0 wins whatever the order of visits */
+        for (int i = 0; i < 2; i++)
+            assert_int_equal(sc_accel_attach_instance(world, obj, x0, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(world, &vg, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(world), SC_OK);
+        /* a scene without instances, of two meshes: the packet kernels with ids mapped */
+        assert_int_equal(sc_accel_new(&cfg, &flat), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(flat, &vg, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(flat, &vt, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(flat), SC_OK);
+        sc_accel *scenes[2] = { world, flat };
+        for (int sc = 0; sc < 2; sc++) {
+            const sc_accel *a = scenes[sc];
+            size_t hits = 0, inst_hits = 0, ties = 0;
+            for (size_t r = 0; r < N; r++) {
+                int o;
+                assert_int_equal(sc_accel_closest(a, &rays[r], &want[r], NULL), SC_OK);
+                assert_int_equal(sc_accel_any(a, &rays[r], &o, NULL), SC_OK);
+                want_occ[r] = o;
+                hits += want[r].prim != SC_HITREC_MISS;
+                inst_hits += want[r].inst != SC_INVALID_ID;
+                ties += want[r].inst == 0;
+                if (!(want[r].inst == SC_INVALID_ID || want[r].inst < NINST))
+                    fail_msg("cfg %d ray %zu: inst %u t %a prim %u", cfgi, r, want[r].inst, want[r].t, want[r].prim);
+            }
+            print_message("cfg %d scene %d: %zu of %zu rays hit, %zu through instances, %zu on the three coincident\n",
+                          cfgi, sc, hits, N, inst_hits, ties);
+            if (sc == 0)
+                assert_true(ties > N / 64);
+            assert_true(hits > (sc ? N / 16 : N / 4));
+            if (sc == 0)
+                assert_true(inst_hits > N / 4);
+            for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+                if (!sc_isa_supported((sc_isa)isa))
+                    continue;
+                assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+                /* packets of 16 and 8; in every third packet some lanes
+                 * invalid, holding NaN (never read) */
+                for (size_t base = 0; base + 16 <= N; base += 16) {
+                    sc_ray_packet16 p16;
+                    sc_ray_packet8 p8[2];
+                    int32_t valid[16];
+                    for (unsigned i = 0; i < 16; i++) {
+                        const sc_ray *q = &rays[base + i];
+                        valid[i] = (base / 16) % 3 != 1 || (i * 7 + base / 16) % 5 != 0;
+                        const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin,
+                                             q->dir[0], q->dir[1], q->dir[2], q->tmax };
+                        for (unsigned k = 0; k < 8; k++) {
+                            const float v = valid[i] ? f[k] : NAN;
+                            (&p16.ox[0])[16 * k + i] = v;
+                            (&p8[i / 8].ox[0])[8 * k + i % 8] = v;
+                        }
+                    }
+                    sc_hit_packet16 h16;
+                    sc_hit_packet8 h8[2];
+                    int32_t o16[16], o8[16];
+                    sc_trace_stats ts;
+                    memset(&ts, 0, sizeof ts);
+                    assert_int_equal(sc_accel_closest16(a, valid, &p16, &h16, (base / 16) % 2 ? &ts : NULL), SC_OK);
+                    assert_int_equal(sc_accel_any16(a, valid, &p16, o16, (base / 16) % 2 ? &ts : NULL), SC_OK);
+                    for (unsigned h = 0; h < 2; h++) {
+                        assert_int_equal(sc_accel_closest8(a, valid + 8 * h, &p8[h], &h8[h], NULL), SC_OK);
+                        assert_int_equal(sc_accel_any8(a, valid + 8 * h, &p8[h], o8 + 8 * h, NULL), SC_OK);
+                    }
+                    unsigned nvalid = 0;
+                    for (unsigned i = 0; i < 16; i++) {
+                        if (!valid[i])
+                            continue;
+                        nvalid++;
+                        const size_t r = base + i;
+                        const sc_hitrec a16 = { h16.t[i], h16.u[i], h16.v[i], h16.prim[i],
+                                                { h16.ng_x[i], h16.ng_y[i], h16.ng_z[i] }, h16.geom[i], h16.inst[i] };
+                        const sc_hit_packet8 *e = &h8[i / 8];
+                        const unsigned j = i % 8;
+                        const sc_hitrec a8 = { e->t[j], e->u[j], e->v[j], e->prim[j],
+                                               { e->ng_x[j], e->ng_y[j], e->ng_z[j] }, e->geom[j], e->inst[j] };
+                        if (memcmp(&a16, &want[r], sizeof a16) || memcmp(&a8, &want[r], sizeof a8))
+                            fail_msg("cfg %d scene %d %s ray %zu: packet (t %a prim %u geom %u inst %u) / (t %a prim %u) "
+                                     "against single (t %a prim %u geom %u inst %u)", cfgi, sc,
+                                     sc_isa_name((sc_isa)isa), r, a16.t, a16.prim, a16.geom, a16.inst, a8.t, a8.prim,
+                                     want[r].t, want[r].prim, want[r].geom, want[r].inst);
+                        assert_int_equal(o16[i], want_occ[r]);
+                        assert_int_equal(o8[i], want_occ[r]);
+                    }
+                    if ((base / 16) % 2)
+                        assert_int_equal(ts.rays, 2 * nvalid);
+                }
+                /* streams: strided, the camera tiles as packets and the rest one by one */
+                const size_t hs = sizeof(sc_hitrec) * 2, os = 12;
+                assert_int_equal(sc_accel_closest_n(a, rays, sizeof *rays, got, hs, N, 0, NULL), SC_OK);
+                assert_int_equal(sc_accel_any_n(a, rays, sizeof *rays, got_occ, os, N, 0, NULL), SC_OK);
+                for (size_t r = 0; r < N; r++) {
+                    const sc_hitrec *g = (const sc_hitrec *)(const void *)((const char *)got + r * hs);
+                    if (memcmp(g, &want[r], sizeof *g))
+                        fail_msg("cfg %d scene %d %s stream ray %zu: t %a prim %u against t %a prim %u", cfgi, sc,
+                                 sc_isa_name((sc_isa)isa), r, g->t, g->prim, want[r].t, want[r].prim);
+                    assert_int_equal(*(const int32_t *)(const void *)((const char *)got_occ + r * os), want_occ[r]);
+                }
+            }
+            assert_int_equal(sc_isa_force(start), SC_OK);
+        }
+        /* refused: a misaligned packet, a valid lane with a bad ray, an uncommitted scene */
+        _Alignas(64) unsigned char buf[sizeof(sc_ray_packet16) + 64];
+        sc_ray_packet16 *bad = (sc_ray_packet16 *)(void *)(buf + 4);
+        int32_t valid[16], occ[16];
+        sc_hit_packet16 h16;
+        for (unsigned i = 0; i < 16; i++) {
+            valid[i] = 1;
+            float *row = &bad->ox[0];
+            for (unsigned k = 0; k < 8; k++)
+                row[16 * k + i] = k == 6 || k == 7 ? 1.0f : 0.0f;
+        }
+        assert_int_equal(sc_accel_closest16(world, valid, bad, &h16, NULL), SC_ERR_INVALID_ARGUMENT);
+        sc_ray_packet16 good;
+        memcpy(&good, bad, sizeof good);
+        assert_int_equal(sc_accel_closest16(world, valid, &good, &h16, NULL), SC_OK);
+        good.dx[3] = NAN;
+        assert_int_equal(sc_accel_closest16(world, valid, &good, &h16, NULL), SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal(sc_accel_any16(world, valid, &good, occ, NULL), SC_ERR_INVALID_ARGUMENT);
+        valid[3] = 0;
+        assert_int_equal(sc_accel_any16(world, valid, &good, occ, NULL), SC_OK);
+        sc_accel *fresh;
+        assert_int_equal(sc_accel_new(&cfg, &fresh), SC_OK);
+        assert_int_equal(sc_accel_any16(fresh, valid, &good, occ, NULL), SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal(sc_accel_commit(fresh), SC_OK);
+        assert_int_equal(sc_accel_closest16(fresh, valid, &good, &h16, NULL), SC_OK);
+        assert_int_equal(h16.prim[0], SC_HITREC_MISS);
+        assert_true(h16.t[0] == 1.0f);
+        sc_accel_release(fresh);
+        sc_accel_release(world);
+        sc_accel_release(flat);
+        sc_accel_release(obj);
+    }
+    free(rays), free(want), free(got), free(want_occ), free(got_occ);
+    mesh_free(&tor), mesh_free(&box), mesh_free(&ground);
+}
+
 int main(void)
 {
     (void)each_shared_scene;
@@ -815,6 +1019,7 @@ int main(void)
         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_instances),
         cmocka_unit_test(test_no_holes),
+        cmocka_unit_test(test_packets),
         cmocka_unit_test(test_refit),
         cmocka_unit_test(test_errors),
     };

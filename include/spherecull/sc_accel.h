@@ -155,8 +155,24 @@ SC_API sc_status sc_accel_refit(sc_accel *accel);
 SC_API sc_status sc_accel_closest(const sc_accel *accel, const sc_ray *ray, sc_hitrec *hit,
                                   sc_trace_stats *stats);
 SC_API sc_status sc_accel_any(const sc_accel *accel, const sc_ray *ray, int *occluded, sc_trace_stats *stats);
-/* Streams, as sc_trace_closest_n / sc_trace_any_n: a scene without
- * instances traces coherent runs as packets; with instances, ray by ray. */
+/* Packets, as sc_trace_closest8/16 / sc_trace_any8/16 (the same SoA rays,
+ * valid lanes, alignment and errors): lane i is bit for bit what
+ * sc_accel_closest / sc_accel_any returns for ray i. Through instances the
+ * packet walks the top tree together, and the lanes that reach an instance
+ * go through its tree as one packet of object-space rays, each with its
+ * closest hit so far as its end. Pays for coherent rays (a camera tile,
+ * shadow rays of a tile to one light), as sc_trace.h's packets do. */
+SC_API sc_status sc_accel_closest8(const sc_accel *accel, const int32_t valid[8], const sc_ray_packet8 *rays,
+                                   sc_hit_packet8 *hits, sc_trace_stats *stats);
+SC_API sc_status sc_accel_closest16(const sc_accel *accel, const int32_t valid[16], const sc_ray_packet16 *rays,
+                                    sc_hit_packet16 *hits, sc_trace_stats *stats);
+SC_API sc_status sc_accel_any8(const sc_accel *accel, const int32_t valid[8], const sc_ray_packet8 *rays,
+                               int32_t occluded[8], sc_trace_stats *stats);
+SC_API sc_status sc_accel_any16(const sc_accel *accel, const int32_t valid[16], const sc_ray_packet16 *rays,
+                                int32_t occluded[16], sc_trace_stats *stats);
+/* Streams, as sc_trace_closest_n / sc_trace_any_n: coherent runs of 16 as
+ * packets (through instances too), the rest ray by ray; the answers of the
+ * single-ray calls, bit for bit. */
 SC_API sc_status sc_accel_closest_n(const sc_accel *accel, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
                                     size_t hit_stride, size_t n, unsigned flags, sc_trace_stats *stats);
 SC_API sc_status sc_accel_any_n(const sc_accel *accel, const sc_ray *rays, size_t ray_stride, int32_t *occluded,

@@ -20,6 +20,7 @@
 #include "common/sc_mem.h"
 #include "spherecull/sc_accel.h"
 #include "isa/isa_dispatch.h"
+#include "trace/trace_packet.h"
 #include "trace/trace_top.h"
 
 typedef struct accel_inst {
@@ -369,7 +370,7 @@ static sc_status build_top(sc_accel *a)
         const sc_bvh *const *slot = (const sc_bvh *const *)(i < a->ninst ? &a->inst[i].obj->bvh : &a->bvh);
         a->items[i] = (sc_top_item){ slot, i < a->ninst ? a->inst[i].inv : NULL,
                                      i < a->ninst ? a->inst[i].cof : NULL,
-                                     i < a->ninst ? (uint32_t)i : SC_INVALID_ID };
+                                     i < a->ninst ? (uint32_t)i : SC_INVALID_ID, { 0, 0, 0 }, 0 };
         const sc_bvh *b = *slot;
         if (!b || !b->has_root)
             continue;
@@ -388,6 +389,13 @@ static sc_status build_top(sc_accel *a)
             for (int k = 0; k < 3; k++)
                 boxes[n].lo[k] = b->root_lo[k], boxes[n].hi[k] = b->root_hi[k];
         }
+        double h2 = 0;
+        for (int k = 0; k < 3; k++) {
+            const double e = 0.5 * ((double)boxes[n].hi[k] - boxes[n].lo[k]);
+            a->items[i].center[k] = (float)(0.5 * ((double)boxes[n].lo[k] + boxes[n].hi[k]));
+            h2 += e * e;
+        }
+        a->items[i].half = (float)sqrt(h2);
         box_grow(&all, &boxes[n]);
         ids[n++] = (uint32_t)i;
     }
@@ -546,12 +554,113 @@ sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_t
     return SC_OK;
 }
 
+/* ---- packets and streams ------------------------------------------------ */
+
+/* One body for the four packet calls (rows and out as sc_trace_packet_lanes). */
+static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const float *rows, unsigned W, void *out,
+                              int any, sc_trace_stats *st)
+{
+    const uintptr_t align = W * 4;
+    if (!a || !valid || !rows || !out || !a->committed || ((uintptr_t)rows & (align - 1)) ||
+        (!any && ((uintptr_t)out & (align - 1))))
+        return SC_ERR_INVALID_ARGUMENT;
+    const int64_t lanes64 = sc_packet_valid_lanes(valid, rows, W);
+    if (lanes64 < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    const uint32_t lanes = (uint32_t)lanes64;
+    if (!a->ninst && a->bvh) {
+        /* one tree: the packet kernels, ids mapped to (geom, prim) */
+        sc_trace_packet_lanes(a->bvh, lanes, rows, W, out, any, st);
+        if (!any && a->bvh->mesh_count > 1)
+            for (uint32_t e = lanes; e; e &= e - 1) {
+                const unsigned i = (unsigned)__builtin_ctz(e);
+                sc_hitrec h;
+                sc_hit_lane_get(out, W, i, &h);
+                sc_top_map_ids(a->bvh, &h);
+                sc_hit_lane_put(out, W, i, &h);
+            }
+        return SC_OK;
+    }
+    if (a->ninst && a->top_nodes) {
+        sc_top_trace_packet(&a->top, lanes, rows, W, out, any, st);
+    } else {
+        /* nothing to hit */
+        for (uint32_t e = lanes; e; e &= e - 1) {
+            const unsigned i = (unsigned)__builtin_ctz(e);
+            if (any) {
+                ((int32_t *)out)[i] = 0;
+            } else {
+                const sc_ray r = { { 0, 0, 0 }, 0, { 1, 0, 0 }, rows[7 * W + i] };
+                sc_hitrec h;
+                miss(&r, &h);
+                sc_hit_lane_put(out, W, i, &h);
+            }
+        }
+    }
+    if (st)
+        st->rays += (uint64_t)__builtin_popcount(lanes);
+    return SC_OK;
+}
+
+sc_status sc_accel_closest8(const sc_accel *a, const int32_t valid[8], const sc_ray_packet8 *rays,
+                            sc_hit_packet8 *hits, sc_trace_stats *st)
+{
+    return accel_packet(a, valid, (const float *)(const void *)rays, 8, hits, 0, st);
+}
+
+sc_status sc_accel_closest16(const sc_accel *a, const int32_t valid[16], const sc_ray_packet16 *rays,
+                             sc_hit_packet16 *hits, sc_trace_stats *st)
+{
+    return accel_packet(a, valid, (const float *)(const void *)rays, 16, hits, 0, st);
+}
+
+sc_status sc_accel_any8(const sc_accel *a, const int32_t valid[8], const sc_ray_packet8 *rays, int32_t occluded[8],
+                        sc_trace_stats *st)
+{
+    return accel_packet(a, valid, (const float *)(const void *)rays, 8, occluded, 1, st);
+}
+
+sc_status sc_accel_any16(const sc_accel *a, const int32_t valid[16], const sc_ray_packet16 *rays,
+                         int32_t occluded[16], sc_trace_stats *st)
+{
+    return accel_packet(a, valid, (const float *)(const void *)rays, 16, occluded, 1, st);
+}
+
+/* A scene as a stream's target (sc_stream_run). */
+static sc_status accel_packet16(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out,
+                                int any, sc_trace_stats *st)
+{
+    return accel_packet(obj, valid, (const float *)(const void *)rays, 16, out, any, st);
+}
+
+static sc_status accel_single(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,
+                              sc_trace_stats *st)
+{
+    (void)incoherent;
+    if (!any)
+        return sc_accel_closest(obj, ray, out, st);
+    int o = 0;
+    const sc_status s = sc_accel_any(obj, ray, &o, st);
+    if (s == SC_OK)
+        *(int32_t *)out = o;
+    return s;
+}
+
 /* The streams' arguments: out is the result array, out_min its element size. */
 static int stream_ok(const sc_accel *a, const sc_ray *rays, size_t ray_stride, const void *out, size_t out_stride,
                      size_t out_min, size_t n, unsigned flags)
 {
     return a && (!n || (rays && out)) && ray_stride >= sizeof(sc_ray) && out_stride >= out_min && !flags &&
            a->committed;
+}
+
+/* An instanced scene streams through the top level: coherent runs of 16 as
+ * packets (sc_accel_closest16), the rest ray by ray. */
+static sc_status accel_stream(const sc_accel *a, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
+                              size_t n, sc_trace_stats *st, int any)
+{
+    const sc_stream_target T = { a, a->top.lo, a->top.hi, accel_packet16, accel_single };
+    return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, st, any);
 }
 
 sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,
@@ -566,13 +675,7 @@ sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_s
                 sc_top_map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
         return s;
     }
-    sc_status s = SC_OK;
-    for (size_t i = 0; i < n; i++) {
-        const sc_ray *r = (const sc_ray *)(const void *)((const char *)rays + i * ray_stride);
-        if (sc_accel_closest(a, r, (sc_hitrec *)(void *)((char *)hits + i * hit_stride), st) != SC_OK)
-            s = SC_ERR_INVALID_ARGUMENT;
-    }
-    return s;
+    return accel_stream(a, rays, ray_stride, hits, hit_stride, n, st, 0);
 }
 
 sc_status sc_accel_any_n(const sc_accel *a, const sc_ray *rays, size_t ray_stride, int32_t *occluded,
@@ -582,16 +685,7 @@ sc_status sc_accel_any_n(const sc_accel *a, const sc_ray *rays, size_t ray_strid
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst && a->bvh)
         return sc_trace_any_n(a->bvh, rays, ray_stride, occluded, occluded_stride, n, flags, st);
-    sc_status s = SC_OK;
-    for (size_t i = 0; i < n; i++) {
-        const sc_ray *r = (const sc_ray *)(const void *)((const char *)rays + i * ray_stride);
-        int o = 0;
-        if (sc_accel_any(a, r, &o, st) != SC_OK)
-            s = SC_ERR_INVALID_ARGUMENT;
-        else
-            *(int32_t *)(void *)((char *)occluded + i * occluded_stride) = o;
-    }
-    return s;
+    return accel_stream(a, rays, ray_stride, occluded, occluded_stride, n, st, 1);
 }
 
 sc_status sc_accel_get_info(const sc_accel *a, sc_accel_info *info)

@@ -10,6 +10,7 @@
 #include "bvh/bvh_internal.h"
 #include "isa/isa_dispatch.h"
 #include "ray_setup.h"
+#include "trace_packet.h"
 
 sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *stats)
 {
@@ -39,10 +40,10 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
 /* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
  * conditions of sc_ray_valid four lanes at a time (SSE2, the x86-64
  * baseline): isfinite(d) as |d| <= FLT_MAX, which NaN fails. */
-static int64_t packet_lanes(const int32_t *valid, const float *ox, const float *oy, const float *oz,
-                            const float *tmin, const float *dx, const float *dy, const float *dz,
-                            const float *tmax, unsigned K)
+int64_t sc_packet_valid_lanes(const int32_t *valid, const float *rows, unsigned K)
 {
+    const float *ox = rows, *oy = rows + K, *oz = rows + 2 * K, *tmin = rows + 3 * K, *dx = rows + 4 * K,
+                *dy = rows + 5 * K, *dz = rows + 6 * K, *tmax = rows + 7 * K;
     uint32_t lanes = 0, bad = 0;
 #if defined(__SSE2__)
     const __m128 sgn = _mm_set1_ps(-0.0f), omax = _mm_set1_ps(SC_MAX_ORIGIN), fmax = _mm_set1_ps(FLT_MAX),
@@ -85,7 +86,7 @@ static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 
 /* Lane i of an 8- or 16-lane hit packet (sc_hit.h: nine rows of W, in the
  * order t, u, v, prim, ng_x, ng_y, ng_z, geom, inst) to and from a hit
  * record. */
-static void hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h)
+void sc_hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h)
 {
     float *f = packet;
     uint32_t *u = packet;
@@ -95,7 +96,7 @@ static void hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *
     u[7 * W + i] = h->geom, u[8 * W + i] = h->inst;
 }
 
-static void hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h)
+void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h)
 {
     const float *f = packet;
     const uint32_t *u = packet;
@@ -105,24 +106,16 @@ static void hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *
     h->geom = u[7 * W + i], h->inst = u[8 * W + i];
 }
 
-static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
-                              int any, sc_trace_stats *stats)
+void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                           sc_trace_stats *stats)
 {
-    const uintptr_t align = W * 4;
-    if (!bvh || !valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
-        return SC_ERR_INVALID_ARGUMENT;
-    const int64_t lanes64 = packet_lanes(valid, rows, rows + W, rows + 2 * W, rows + 3 * W, rows + 4 * W,
-                                         rows + 5 * W, rows + 6 * W, rows + 7 * W, W);
-    if (lanes64 < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const uint32_t lanes = (uint32_t)lanes64;
     const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
     if (W == 16 && (any ? k->any_p16 != NULL : k->closest_p16 != NULL)) {
         if (any)
             k->any_p16(bvh, (const sc_ray_packet16 *)(const void *)rows, lanes, out, stats);
         else
             k->closest_p16(bvh, (const sc_ray_packet16 *)(const void *)rows, lanes, out, stats);
-        return SC_OK;
+        return;
     }
     if (any ? k->any_p8 != NULL : k->closest_p8 != NULL) {
         /* 8 lanes, or each half of 16 as a packet of 8 */
@@ -144,12 +137,12 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
                 for (uint32_t e = hl; e; e &= e - 1) {
                     const unsigned i = (unsigned)__builtin_ctz(e);
                     sc_hitrec one;
-                    hit_lane_get(&h8, 8, i, &one);
-                    hit_lane_put(h16, 16, 8 * h + i, &one);
+                    sc_hit_lane_get(&h8, 8, i, &one);
+                    sc_hit_lane_put(h16, 16, 8 * h + i, &one);
                 }
             }
         }
-        return SC_OK;
+        return;
     }
     for (uint32_t e = lanes; e; e &= e - 1) {
         const unsigned i = (unsigned)__builtin_ctz(e);
@@ -164,8 +157,20 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
             k->closest_stats(bvh, &r, &h, stats);
         else
             k->closest(bvh, &r, &h);
-        hit_lane_put(out, W, i, &h);
+        sc_hit_lane_put(out, W, i, &h);
     }
+}
+
+static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
+                              int any, sc_trace_stats *stats)
+{
+    const uintptr_t align = W * 4;
+    if (!bvh || !valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
+        return SC_ERR_INVALID_ARGUMENT;
+    const int64_t lanes = sc_packet_valid_lanes(valid, rows, W);
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    sc_trace_packet_lanes(bvh, (uint32_t)lanes, rows, W, out, any, stats);
     return SC_OK;
 }
 
@@ -205,7 +210,7 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 #define SC_STREAM_SPREAD 0.2f
 #define SC_STREAM_ORIGINS (1.0f / 16)
 
-static int packet_coherent(const sc_ray_packet16 *p, const sc_bvh *bvh)
+static int packet_coherent(const sc_ray_packet16 *p, const float *lo, const float *hi)
 {
     float dlo[3], dhi[3], olo[3], ohi[3];
     const float *org[3] = { p->ox, p->oy, p->oz }, *dir[3] = { p->dx, p->dy, p->dz };
@@ -244,7 +249,7 @@ static int packet_coherent(const sc_ray_packet16 *p, const sc_bvh *bvh)
     int narrow = 1, near = 1;
     for (int a = 0; a < 3; a++) {
         narrow &= dhi[a] - dlo[a] <= SC_STREAM_SPREAD;
-        near &= ohi[a] - olo[a] <= SC_STREAM_ORIGINS * (bvh->root_hi[a] - bvh->root_lo[a]);
+        near &= ohi[a] - olo[a] <= SC_STREAM_ORIGINS * (hi[a] - lo[a]);
     }
     return narrow || near;
 }
@@ -252,21 +257,21 @@ static int packet_coherent(const sc_ray_packet16 *p, const sc_bvh *bvh)
 /* A quick "no" before the transpose: the first and the last ray of a run
  * (opposite corners of a pixel tile) already differ more in direction and
  * in origin than a coherent run may. Random rays leave here. */
-static int pair_incoherent(const sc_ray *a, const sc_ray *b, const sc_bvh *bvh)
+static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi)
 {
     float la = fabsf(a->dir[0]) + fabsf(a->dir[1]) + fabsf(a->dir[2]);
     float lb = fabsf(b->dir[0]) + fabsf(b->dir[1]) + fabsf(b->dir[2]);
     int dir_far = 0, org_far = 0;
     for (int k = 0; k < 3; k++) {
         dir_far |= fabsf(a->dir[k] * lb - b->dir[k] * la) > SC_STREAM_SPREAD * la * lb;
-        org_far |= fabsf(a->org[k] - b->org[k]) > SC_STREAM_ORIGINS * (bvh->root_hi[k] - bvh->root_lo[k]);
+        org_far |= fabsf(a->org[k] - b->org[k]) > SC_STREAM_ORIGINS * (hi[k] - lo[k]);
     }
     return dir_far && org_far;
 }
 
 /* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
  * by one (which answers the others). */
-static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_stride, char *out,
+static sc_status stream_packet(const sc_stream_target *T, const char *rays, size_t ray_stride, char *out,
                                size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any)
 {
 #define RAY(j) ((const sc_ray *)(const void *)(rays + (base + (j)) * ray_stride))
@@ -274,7 +279,7 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
     sc_ray_packet16 p __attribute__((aligned(64)));
     int32_t valid[16];
     float *soa = p.ox;
-    if (cnt == 16 && pair_incoherent(RAY(0), RAY(15), bvh))
+    if (cnt == 16 && pair_incoherent(RAY(0), RAY(15), T->lo, T->hi))
         goto one_by_one;
 #if defined(__SSE2__)
     if (cnt == 16) {
@@ -302,55 +307,80 @@ static sc_status stream_packet(const sc_bvh *bvh, const char *rays, size_t ray_s
             p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
         }
     }
-    if (cnt == 16 && !packet_coherent(&p, bvh))
+    if (cnt == 16 && !packet_coherent(&p, T->lo, T->hi))
         goto one_by_one;
     if (any) {
         int32_t occ[16];
-        if (sc_trace_any16(bvh, valid, &p, occ, stats) == SC_OK) {
+        if (T->packet16(T->obj, valid, &p, occ, 1, stats) == SC_OK) {
             for (unsigned i = 0; i < cnt; i++)
                 *(int32_t *)(void *)OUT(i) = occ[i];
             return SC_OK;
         }
     } else {
         sc_hit_packet16 h __attribute__((aligned(64)));
-        if (sc_trace_closest16(bvh, valid, &p, &h, stats) == SC_OK) {
+        if (T->packet16(T->obj, valid, &p, &h, 0, stats) == SC_OK) {
             for (unsigned i = 0; i < cnt; i++) {
                 sc_hitrec one;
-                hit_lane_get(&h, 16, i, &one);
+                sc_hit_lane_get(&h, 16, i, &one);
                 memcpy(OUT(i), &one, sizeof one);
             }
             return SC_OK;
         }
     }
 one_by_one:;
-    /* Rays that failed the coherence tests: the kernels without the octant
-     * branch, which random directions mispredict (not with statistics,
-     * which have one generic kernel anyway). */
+    /* rays the coherence tests sent alone, or a packet with a refused ray
+     * (whose others are answered here) */
     sc_status status = SC_OK;
-    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-    for (unsigned i = 0; i < cnt; i++) {
-        sc_status st;
-        if (!stats && sc_ray_valid(RAY(i))) {
-            if (any)
-                *(int32_t *)(void *)OUT(i) = k->any_incoherent(bvh, RAY(i));
-            else
-                k->closest_incoherent(bvh, RAY(i), (sc_hitrec *)(void *)OUT(i));
-            continue;
-        }
-        if (any) {
-            int o = 0;
-            st = sc_trace_any(bvh, RAY(i), &o, stats);
-            if (st == SC_OK)
-                *(int32_t *)(void *)OUT(i) = o;
-        } else {
-            st = sc_trace_closest(bvh, RAY(i), (sc_hitrec *)(void *)OUT(i), stats);
-        }
+    for (unsigned i = 0; i < cnt; i++)
+        if (T->single(T->obj, RAY(i), OUT(i), any, 1, stats) != SC_OK)
+            status = SC_ERR_INVALID_ARGUMENT;
+    return status;
+#undef RAY
+#undef OUT
+}
+
+sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ray_stride, void *out,
+                        size_t out_stride, size_t n, sc_trace_stats *stats, int any)
+{
+    sc_status status = SC_OK;
+    for (size_t base = 0; base < n; base += 16) {
+        const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
+        sc_status st = stream_packet(T, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
+                                     stats, any);
         if (st != SC_OK)
             status = st;
     }
     return status;
-#undef RAY
-#undef OUT
+}
+
+/* A BVH as a stream's target. Rays that failed the coherence tests go to
+ * the kernels without the octant branch, which random directions
+ * mispredict (not with statistics, which have one generic kernel anyway). */
+static sc_status bvh_packet16(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out,
+                              int any, sc_trace_stats *stats)
+{
+    return any ? sc_trace_any16(obj, valid, rays, out, stats) : sc_trace_closest16(obj, valid, rays, out, stats);
+}
+
+static sc_status bvh_single(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,
+                            sc_trace_stats *stats)
+{
+    const sc_bvh *bvh = obj;
+    if (incoherent && !stats && sc_ray_valid(ray)) {
+        const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+        if (any)
+            *(int32_t *)out = k->any_incoherent(bvh, ray);
+        else
+            k->closest_incoherent(bvh, ray, out);
+        return SC_OK;
+    }
+    if (!any)
+        return sc_trace_closest(bvh, ray, out, stats);
+    int o = 0;
+    const sc_status st = sc_trace_any(bvh, ray, &o, stats);
+    if (st == SC_OK)
+        *(int32_t *)out = o;
+    return st;
 }
 
 static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
@@ -359,15 +389,8 @@ static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride
     if (!bvh || (n && (!rays || !out)) || ray_stride < sizeof(sc_ray) ||
         out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || flags != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    sc_status status = SC_OK;
-    for (size_t base = 0; base < n; base += 16) {
-        const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
-        sc_status st = stream_packet(bvh, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
-                                     stats, any);
-        if (st != SC_OK)
-            status = st;
-    }
-    return status;
+    const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single };
+    return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, stats, any);
 }
 
 sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,

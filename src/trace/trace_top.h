@@ -35,6 +35,7 @@ typedef struct sc_top_item {
     const double *inv;           /* 12: world to object, row-major 3x4; NULL: no transform */
     const float *cof;            /* 9: cof(M), row-major: object normals to world */
     uint32_t inst;               /* hit.inst of its hits (SC_INVALID_ID without a transform) */
+    float center[3], half;       /* its world box: centre, half diagonal (packets' coherence test) */
 } sc_top_item;
 
 typedef struct sc_top {
@@ -94,6 +95,38 @@ static inline int sc_top_better(const sc_hitrec *h, const sc_hitrec *best)
     if (h->geom != best->geom)
         return h->geom < best->geom;
     return h->prim < best->prim;
+}
+
+/* How far boxes are tested once best holds a hit: one float past best->t
+ * (within the ray's own end), so that a hit of another item at the same
+ * rounded t, which may win the tie, is still reached. A hit found past
+ * best->t loses to it (sc_top_better). */
+static inline float sc_top_tmax(const sc_hitrec *best, float ray_tmax)
+{
+    if (best->prim == SC_HITREC_MISS)
+        return ray_tmax;
+    /* the next float up, by its bits (t >= tmin >= 0; not libm's
+     * nextafterf, a call on every node a ray visits) */
+    float up = best->t;
+    if (up >= 0 && up < INFINITY) {
+        uint32_t bits;
+        memcpy(&bits, &up, sizeof bits);
+        bits = up == 0 ? 1 : bits + 1;
+        memcpy(&up, &bits, sizeof up);
+    }
+    return up < ray_tmax ? up : ray_tmax;
+}
+
+/* How far an item's BVH is traced. The exact test's reported t is rounded
+ * along the path that decided it, and which path that is depends on tmax
+ * (a hit near tmax goes to the double stage, whose t is the more accurate
+ * one): so an item of that test is traced to the ray's own end, making
+ * its answer the same whatever was found before it, and the smallest t
+ * over the items does not depend on the order they are visited in. The
+ * other tests' t does not depend on tmax, which only filters. */
+static inline float sc_top_item_tmax(const sc_bvh *b, const sc_hitrec *best, float ray_tmax)
+{
+    return b->cfg.tri_test == SC_TRI_EXACT ? ray_tmax : sc_top_tmax(best, ray_tmax);
 }
 
 static inline void sc_top_normal(const float *cof, float ng[3])

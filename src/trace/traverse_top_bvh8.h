@@ -32,7 +32,7 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
     if (ANY) {
         occ = st ? k->any_stats(b, &r, &s) : k->any(b, &r);
     } else {
-        r.tmax = best->t;
+        r.tmax = sc_top_item_tmax(b, best, ray->tmax);
         if (st)
             k->closest_stats(b, &r, &h, &s);
         else
@@ -75,7 +75,7 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     sp++;
     while (sp) {
         const sc_stack_entry e = stack[--sp];
-        const float tmax = ANY ? ray->tmax : best->t;
+        const float tmax = ANY ? ray->tmax : sc_top_tmax(best, ray->tmax);
         if (e.dist > tmax)
             continue;
         if (sc_ref_is_leaf(e.ref)) {

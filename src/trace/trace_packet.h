@@ -1,0 +1,68 @@
+/* The packet and stream machinery behind sc_trace.h's packet and stream
+ * calls, for the scene handle (src/accel) to reuse: lane-level packet
+ * tracing without the argument checks, the hit packet's lanes, and the
+ * stream loop over any target that can trace a packet and a ray. */
+#ifndef SPHERECULL_TRACE_TRACE_PACKET_H
+#define SPHERECULL_TRACE_TRACE_PACKET_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "spherecull/sc_bvh.h"
+#include "spherecull/sc_hit.h"
+#include "spherecull/sc_ray.h"
+#include "spherecull/sc_trace.h"
+
+/* The valid lanes of a W-lane packet (rows: ox oy oz tmin dx dy dz tmax,
+ * W floats each) as a mask; -1 if a valid lane's ray is one
+ * sc_trace_closest refuses. */
+int64_t sc_packet_valid_lanes(const int32_t *valid, const float *rows, unsigned W);
+
+/* Lanes `lanes` (checked rays) of a W-lane packet (W = 8 or 16) against
+ * bvh: the level's packet kernel of that width, 16 lanes as two 8-lane
+ * halves where the level has only those, else lane by lane. out: the hit
+ * packet (closest) or W int32_t (any); lanes not in `lanes` are not
+ * written. The rows need W * 4-byte alignment, the hit packet too. */
+void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                           sc_trace_stats *stats);
+
+/* Lane i of a W-lane hit packet (rows t, u, v, prim, ng_x, ng_y, ng_z,
+ * geom, inst) to and from a hit record. */
+void sc_hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h);
+void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h);
+
+/* What a stream traces: a 16-ray packet (valid lanes checked by the
+ * callee: returns non-OK, writing nothing, if one is refused) and single
+ * rays (incoherent: a ray the coherence tests sent alone; checked by the
+ * callee). lo/hi: the scene's box, the scale of the origin test. */
+typedef struct sc_stream_target {
+    const void *obj;
+    const float *lo, *hi;
+    sc_status (*packet16)(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out, int any,
+                          sc_trace_stats *stats);
+    sc_status (*single)(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,
+                        sc_trace_stats *stats);
+} sc_stream_target;
+
+/* n rays at ray_stride; results at out_stride (sc_hitrec, or int32_t for
+ * any). Runs of 16 coherent rays as packets, the rest one by one. The
+ * strides and flags are the caller's to check. */
+sc_status sc_stream_run(const sc_stream_target *t, const sc_ray *rays, size_t ray_stride, void *out,
+                        size_t out_stride, size_t n, sc_trace_stats *stats, int any);
+
+/* Lanes `lanes` (checked rays) of a W-lane packet (W = 8 or 16) through
+ * the top level of a two-level scene (trace_top.h): the packet walks the
+ * top tree, each lane testing the grown boxes (sc_top_slab), and at an
+ * instance the lanes that reached it go on as one packet of object-space
+ * rays (sc_top_object_ray) through sc_trace_packet_lanes, each with its
+ * closest hit so far as tmax. Lane i's answer is bit for bit what the
+ * single-ray top kernel gives for ray i: of the hits the smallest t, then
+ * (inst, geom, prim), whatever order the instances are reached in. out:
+ * the hit packet (closest; the lanes' misses are written here first) or W
+ * int32_t (any). Statistics count the packet's top nodes and the object
+ * packets' counters, not the rays (the caller counts each ray once). */
+struct sc_top;
+void sc_top_trace_packet(const struct sc_top *top, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                         sc_trace_stats *stats);
+
+#endif
