@@ -3,7 +3,9 @@
  * figures):
  *   instancing  N instances of one mesh (rotated, scaled, on a grid): build
  *               seconds, bytes, and Mrays/s of primary, shadow and diffuse
- *               rays, one thread, paired repeats, medians;
+ *               rays, one thread, paired repeats, medians; single rays
+ *               (rtcIntersect1) and 16-ray packets of 4x4 pixel tiles and
+ *               the rays they spawn (rtcIntersect16), the "16" rows;
  *   refit       the mesh deformed by a smooth wave K times: refit seconds
  *               against a fresh build and against Embree's refit build
  *               quality, then the speed of the refitted trees against
@@ -75,17 +77,22 @@ static void make_rays(const float lo[3], const float hi[3], int w, int h, const 
     rs->shadow = malloc(rs->n * sizeof(sc_ray));
     rs->diffuse = malloc(rs->n * sizeof(sc_ray));
     const double fov = 0.45;
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            double sx = (2 * (x + 0.5) / w - 1) * fov, sy = (1 - 2 * (y + 0.5) / h) * fov;
-            sc_ray *ray = &rs->primary[(size_t)y * w + x];
-            for (int k = 0; k < 3; k++) {
-                ray->org[k] = (float)eye[k];
-                ray->dir[k] = (float)(f[k] + sx * r[k] + sy * u[k]);
+    /* in 4x4 pixel tiles, as a renderer hands rays to packets (w and h are
+     * multiples of 4); the shadow and diffuse rays follow in that order */
+    size_t next = 0;
+    for (int ty = 0; ty < h; ty += 4)
+        for (int tx = 0; tx < w; tx += 4)
+            for (int j = 0; j < 16; j++) {
+                const int x = tx + j % 4, y = ty + j / 4;
+                double sx = (2 * (x + 0.5) / w - 1) * fov, sy = (1 - 2 * (y + 0.5) / h) * fov;
+                sc_ray *ray = &rs->primary[next++];
+                for (int k = 0; k < 3; k++) {
+                    ray->org[k] = (float)eye[k];
+                    ray->dir[k] = (float)(f[k] + sx * r[k] + sy * u[k]);
+                }
+                ray->tmin = 0;
+                ray->tmax = INFINITY;
             }
-            ray->tmin = 0;
-            ray->tmax = INFINITY;
-        }
     const double light[3] = { c[0] - 0.3 * ext, c[1] + 2 * ext, c[2] + 0.2 * ext };
     sc_rng rng;
     sc_rng_seed(&rng, 42);
@@ -181,9 +188,75 @@ static double run_embree(RTCScene scene, const sc_ray *rays, size_t n, int shado
     return sc_now_seconds() - t0;
 }
 
-/* Paired repeats of one ray set; prints one row. */
-static void time_set(const char *name, const sc_accel *a, RTCScene e, const sc_ray *rays, size_t n, int shadow,
-                     int repeats)
+/* The same through 16-ray packets (sc_accel_closest16 / sc_accel_any16
+ * against rtcIntersect16 / rtcOccluded16): runs of 16 consecutive rays,
+ * the last one padded with invalid lanes. Both loops fill their packet
+ * from the ray array, so both pay the transpose. */
+static double run_ours16(const sc_accel *a, const sc_ray *rays, size_t n, int shadow, result *out)
+{
+    double t0 = sc_now_seconds();
+    for (size_t b = 0; b < n; b += 16) {
+        sc_ray_packet16 p;
+        int32_t valid[16];
+        for (unsigned i = 0; i < 16; i++) {
+            const sc_ray *r = &rays[b + i < n ? b + i : n - 1];
+            valid[i] = b + i < n ? -1 : 0;
+            p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
+            p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
+        }
+        if (shadow) {
+            int32_t occ[16];
+            sc_accel_any16(a, valid, &p, occ, NULL);
+            for (unsigned i = 0; i < 16 && b + i < n; i++)
+                out[b + i].prim = (uint32_t)occ[i], out[b + i].inst = 0;
+        } else {
+            sc_hit_packet16 hp;
+            sc_accel_closest16(a, valid, &p, &hp, NULL);
+            for (unsigned i = 0; i < 16 && b + i < n; i++)
+                out[b + i].prim = hp.prim[i], out[b + i].inst = hp.inst[i];
+        }
+    }
+    return sc_now_seconds() - t0;
+}
+
+static double run_embree16(RTCScene scene, const sc_ray *rays, size_t n, int shadow, result *out)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    double t0 = sc_now_seconds();
+    for (size_t b = 0; b < n; b += 16) {
+        RTC_ALIGN(64) struct RTCRayHit16 rh;
+        RTC_ALIGN(64) int valid[16];
+        for (unsigned i = 0; i < 16; i++) {
+            const sc_ray *r = &rays[b + i < n ? b + i : n - 1];
+            valid[i] = b + i < n ? -1 : 0;
+            rh.ray.org_x[i] = r->org[0], rh.ray.org_y[i] = r->org[1], rh.ray.org_z[i] = r->org[2];
+            rh.ray.dir_x[i] = r->dir[0], rh.ray.dir_y[i] = r->dir[1], rh.ray.dir_z[i] = r->dir[2];
+            rh.ray.tnear[i] = r->tmin, rh.ray.tfar[i] = r->tmax;
+            rh.ray.mask[i] = UINT32_MAX, rh.ray.flags[i] = 0, rh.ray.time[i] = 0, rh.ray.id[i] = i;
+            rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        if (shadow) {
+            rtcOccluded16(valid, scene, &ctx, &rh.ray);
+            for (unsigned i = 0; i < 16 && b + i < n; i++)
+                out[b + i].prim = rh.ray.tfar[i] < 0, out[b + i].inst = 0;
+        } else {
+            rtcIntersect16(valid, scene, &ctx, &rh);
+            for (unsigned i = 0; i < 16 && b + i < n; i++) {
+                const int miss = rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID;
+                out[b + i].prim = miss ? SC_HITREC_MISS : rh.hit.primID[i];
+                out[b + i].inst = miss ? SC_INVALID_ID : rh.hit.instID[0][i];
+            }
+        }
+    }
+    return sc_now_seconds() - t0;
+}
+
+/* Paired repeats of one ray set; prints one row. packet: 16-ray packets
+ * on both sides instead of single rays. */
+static void time_set_as(const char *name, const sc_accel *a, RTCScene e, const sc_ray *rays, size_t n, int shadow,
+                        int repeats, int packet)
 {
     if (!n)
         return;
@@ -191,8 +264,8 @@ static void time_set(const char *name, const sc_accel *a, RTCScene e, const sc_r
     double *to = malloc(sizeof(double) * (size_t)repeats), *te = malloc(sizeof(double) * (size_t)repeats),
            *ratio = malloc(sizeof(double) * (size_t)repeats);
     for (int r = 0; r < repeats; r++) {
-        to[r] = run_ours(a, rays, n, shadow, ro);
-        te[r] = run_embree(e, rays, n, shadow, re);
+        to[r] = packet ? run_ours16(a, rays, n, shadow, ro) : run_ours(a, rays, n, shadow, ro);
+        te[r] = packet ? run_embree16(e, rays, n, shadow, re) : run_embree(e, rays, n, shadow, re);
         ratio[r] = te[r] / to[r];
     }
     size_t same = 0;
@@ -202,6 +275,12 @@ static void time_set(const char *name, const sc_accel *a, RTCScene e, const sc_r
     printf("%-9s %9zu %10.2f %10.2f %8.3fx %9.3f%%\n", name, n, n / mo * 1e-6, n / me * 1e-6,
            sc_median(ratio, repeats), 100.0 * same / n);
     free(ro), free(re), free(to), free(te), free(ratio);
+}
+
+static void time_set(const char *name, const sc_accel *a, RTCScene e, const sc_ray *rays, size_t n, int shadow,
+                     int repeats)
+{
+    time_set_as(name, a, e, rays, n, shadow, repeats, 0);
 }
 
 /* ---- Embree scenes -------------------------------------------------------- */
@@ -312,6 +391,9 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
     time_set("primary", world, eworld, rs.primary, rs.n, 0, repeats);
     time_set("shadow", world, eworld, rs.shadow, rs.nshadow, 1, repeats);
     time_set("diffuse", world, eworld, rs.diffuse, rs.ndiffuse, 0, repeats);
+    time_set_as("primary16", world, eworld, rs.primary, rs.n, 0, repeats, 1);
+    time_set_as("shadow16", world, eworld, rs.shadow, rs.nshadow, 1, repeats, 1);
+    time_set_as("diffuse16", world, eworld, rs.diffuse, rs.ndiffuse, 0, repeats, 1);
     free_rays(&rs);
     rtcReleaseScene(eworld);
     rtcReleaseScene(eobj);
@@ -466,8 +548,8 @@ int main(int argc, char **argv)
         default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T]");
         }
     }
-    if (ninst < 0 || w < 1 || h < 1 || repeats < 1 || refits < 0 || threads < 1)
-        die("bad option value");
+    if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1)
+        die("bad option value (the image size in multiples of 4)");
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     sc_scene *scene;

@@ -191,6 +191,11 @@ SC_API sc_status sc_scene_accel_closest(const sc_scene_accel *accel, const sc_ra
                                         sc_trace_stats *stats);
 SC_API sc_status sc_scene_accel_any(const sc_scene_accel *accel, const sc_ray *rays, size_t n, uint8_t *occluded,
                                     sc_trace_stats *stats);
+/* A hit of the top-level scene (sc_scene_accel_world: inst, geom, prim)
+ * as the view->mesh triangle it stands for (prim; geom 0, inst
+ * SC_INVALID_ID), for callers that trace the world scene themselves
+ * (packets). A miss, or ids the scene does not have, are left as they are. */
+SC_API void sc_scene_accel_flat_hit(const sc_scene_accel *accel, sc_hitrec *hit);
 /* The top-level scene: its instance i is view->instances[i]
  * (sc_accel_instance_ray gives the object-space ray a hit is exact for). */
 SC_API const sc_accel *sc_scene_accel_world(const sc_scene_accel *accel);

@@ -421,7 +421,9 @@ sc_status sc_bench_run(const sc_mesh_view *mesh, const sc_scene_view *instances,
     sc_status st = SC_OK;
     if (instances && instances->num_instances && !o->flatten) {
         if (o->packet) {
-            snprintf(err, errlen, "packets do not trace through instances (--instances flat, or --packet 0)");
+            snprintf(err, errlen, "Embree's packets are not timed through instances here, their yardstick (its "
+                                  "rtcOccluded16 can hang there; bench/bench_scene times both): --instances flat, "
+                                  "or --packet 0");
             return SC_ERR_UNSUPPORTED;
         }
         c.iv = instances;

@@ -65,9 +65,9 @@ sc_status sc_tracer_build(sc_tracer *t, const sc_tracer_def *def, const sc_check
  * through sc_scene_accel (sc_render.h), Embree through instances of one
  * scene per object (sc_embree_create_instanced); the triangles no instance
  * owns form one mesh beside them. Hits come back as view->mesh indices,
- * like the flat tracers'. SC_ERR_UNSUPPORTED for the tracers without an
- * instanced path (8/16 packets, ours and so Embree's; Embree's user
- * geometry). */
+ * like the flat tracers'; ours as single rays, packets (sc_accel_closest16)
+ * or streams, as the definition says. SC_ERR_UNSUPPORTED for Embree's
+ * packets, streams and user geometry (tracer.c says why). */
 sc_status sc_tracer_build_scene(sc_tracer *t, const sc_tracer_def *def, const sc_scene_view *view);
 /* Ours through the instances with any configuration (bench's sweep). */
 sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh_config *cfg,

@@ -131,18 +131,21 @@ sc_status sc_scene_accel_closest(const sc_scene_accel *a, const sc_ray *rays, si
     if (!a || (n && (!rays || !hits)))
         return SC_ERR_INVALID_ARGUMENT;
     sc_status st = sc_accel_closest_n(a->world, rays, sizeof *rays, hits, sizeof *hits, n, 0, stats);
-    for (size_t i = 0; i < n; i++) {
-        sc_hitrec *h = &hits[i];
-        /* a refused ray's entry is the caller's: mapped only if it can be */
-        if (h->prim == SC_HITREC_MISS || (h->inst != SC_INVALID_ID ? h->inst >= a->num_instances
-                                                                   : h->prim >= a->num_own))
-            continue;
-        h->prim = h->inst != SC_INVALID_ID ? (uint32_t)(a->instances[h->inst].first_triangle + h->prim)
-                                           : a->own_prim[h->prim];
-        h->geom = 0;
-        h->inst = SC_INVALID_ID;
-    }
+    for (size_t i = 0; i < n; i++)
+        sc_scene_accel_flat_hit(a, &hits[i]);
     return st;
+}
+
+void sc_scene_accel_flat_hit(const sc_scene_accel *a, sc_hitrec *h)
+{
+    /* a refused ray's entry is the caller's: mapped only if it can be */
+    if (!a || !h || h->prim == SC_HITREC_MISS ||
+        (h->inst != SC_INVALID_ID ? h->inst >= a->num_instances : h->prim >= a->num_own))
+        return;
+    h->prim = h->inst != SC_INVALID_ID ? (uint32_t)(a->instances[h->inst].first_triangle + h->prim)
+                                       : a->own_prim[h->prim];
+    h->geom = 0;
+    h->inst = SC_INVALID_ID;
 }
 
 static sc_status world_any_n(const void *world, const sc_ray *rays, int32_t *occ, size_t n, sc_trace_stats *stats)
