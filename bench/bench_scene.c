@@ -11,7 +11,7 @@
  *               quality, then the speed of the refitted trees against
  *               fresh ones.
  * Both tracers run with flush-to-zero / denormals-are-zero, as Embree
- * asks; Embree gets the thread count we have (--threads, default 1). A
+ * asks; both build (and refit) on --threads threads (default 1). A
  * ratio above 1 means spherecull is faster (or smaller).
  *
  *   bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R]
@@ -35,6 +35,8 @@
 #include "spherecull/sc_scene.h"
 
 static atomic_llong embree_bytes;
+/* Our builds and refits: the default configuration on --threads threads. */
+static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
 {
     (void)ptr, (void)post;
@@ -341,8 +343,8 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
     /* ours */
     double t0 = sc_now_seconds();
     sc_accel *obj, *world;
-    if (sc_accel_new(NULL, &obj) != SC_OK || sc_accel_attach_mesh(obj, mesh, SC_ACCEL_SHARED, NULL) != SC_OK ||
-        sc_accel_commit(obj) != SC_OK || sc_accel_new(NULL, &world) != SC_OK)
+    if (sc_accel_new(&build_cfg, &obj) != SC_OK || sc_accel_attach_mesh(obj, mesh, SC_ACCEL_SHARED, NULL) != SC_OK ||
+        sc_accel_commit(obj) != SC_OK || sc_accel_new(&build_cfg, &world) != SC_OK)
         die("spherecull scene failed");
     const double ours_obj = sc_now_seconds() - t0;
     for (int i = 0; i < ninst; i++)
@@ -432,7 +434,7 @@ static void refit(const sc_mesh_view *mesh, int refits, int w, int h, int repeat
     const sc_mesh_view mv = { pos, nv, mesh->indices, mesh->triangle_count, 0, mesh->index_stride };
     const sc_mesh_view ev = { epos, nv, mesh->indices, mesh->triangle_count, 0, mesh->index_stride };
     sc_accel *a;
-    if (sc_accel_new(NULL, &a) != SC_OK || sc_accel_attach_mesh(a, &mv, SC_ACCEL_SHARED, NULL) != SC_OK ||
+    if (sc_accel_new(&build_cfg, &a) != SC_OK || sc_accel_attach_mesh(a, &mv, SC_ACCEL_SHARED, NULL) != SC_OK ||
         sc_accel_commit(a) != SC_OK)
         die("spherecull scene failed");
     RTCGeometry eg, lg;
@@ -467,7 +469,7 @@ static void refit(const sc_mesh_view *mesh, int refits, int w, int h, int repeat
     /* fresh builds of the final pose */
     double t0 = sc_now_seconds();
     sc_accel *fresh;
-    if (sc_accel_new(NULL, &fresh) != SC_OK || sc_accel_attach_mesh(fresh, &mv, SC_ACCEL_SHARED, NULL) != SC_OK ||
+    if (sc_accel_new(&build_cfg, &fresh) != SC_OK || sc_accel_attach_mesh(fresh, &mv, SC_ACCEL_SHARED, NULL) != SC_OK ||
         sc_accel_commit(fresh) != SC_OK)
         die("spherecull scene failed");
     double ours_fresh = sc_now_seconds() - t0;
@@ -550,6 +552,8 @@ int main(int argc, char **argv)
     }
     if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1)
         die("bad option value (the image size in multiples of 4)");
+    sc_bvh_config_default(&build_cfg);
+    build_cfg.threads = threads;
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     sc_scene *scene;
@@ -568,7 +572,8 @@ int main(int argc, char **argv)
     if (!dev)
         die("no Embree device");
     rtcSetDeviceMemoryMonitorFunction(dev, monitor, NULL);
-    printf("mesh %s (%zu triangles); embree: %s (%d thread%s, FTZ|DAZ); spherecull 1 thread; %d repeats, medians\n",
+    printf("mesh %s (%zu triangles); embree: %s (FTZ|DAZ); both build on %d thread%s, trace on 1; %d repeats, "
+           "medians\n",
            spec, view.mesh.triangle_count, ver, threads, threads == 1 ? "" : "s", repeats);
     if (ninst > 0)
         instancing(&view.mesh, ninst, w, h, repeats, dev);

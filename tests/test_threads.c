@@ -293,6 +293,11 @@ static void test_parallel_build(void **state)
     soup big;
     make_soup(77, BIG, 0.01, &big);
     const sc_mesh_view m = { big.pos, 3 * BIG, big.idx, BIG, 0, 0 };
+    /* the soup moved a little, for the refits: parallel below the top levels */
+    float *moved = malloc(9 * (size_t)BIG * sizeof *moved);
+    for (size_t i = 0; i < 9 * (size_t)BIG; i++)
+        moved[i] = big.pos[i] + 0.003f * sinf(0.37f * (float)i);
+    const sc_mesh_view mv = { moved, 3 * BIG, big.idx, BIG, 0, 0 };
     const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_MINIMAL, SC_PREFILTER_COMPACT,
                                         SC_PREFILTER_OFF };
     for (int md = 0; md < 4; md++) {
@@ -303,6 +308,10 @@ static void test_parallel_build(void **state)
         cfg.prefilter = modes[md];
         cfg.quality = md == 3 ? SC_BUILD_QUALITY_HIGH : SC_BUILD_QUALITY_MEDIUM;
         assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
+        sc_bvh *refit = NULL;
+        assert_int_equal(sc_bvh_build(&m, &cfg, &refit), SC_OK);
+        assert_int_equal(sc_bvh_refit(refit, &mv), SC_OK);
+        assert_true(refit->sah_cost != ref->sah_cost);
         const int counts[] = { 2, 3, 0 };
         for (int c = 0; c < 3; c++) {
             cfg.threads = counts[c];
@@ -317,13 +326,20 @@ static void test_parallel_build(void **state)
             assert_true(b->sah_cost == ref->sah_cost);
             assert_memory_equal(b->nodes, ref->nodes, ref->node_count * sizeof *ref->nodes);
             assert_memory_equal(b->leaves, ref->leaves, ref->leaf_bytes);
+            /* a refit on these threads writes the bytes of one on a single thread */
+            assert_int_equal(sc_bvh_refit(b, &mv), SC_OK);
+            assert_true(b->sah_cost == refit->sah_cost);
+            assert_memory_equal(b->nodes, refit->nodes, ref->node_count * sizeof *ref->nodes);
+            assert_memory_equal(b->leaves, refit->leaves, ref->leaf_bytes);
             sc_bvh_free(b);
         }
         cfg.threads = -1;
         sc_bvh *bad = NULL;
         assert_int_equal(sc_bvh_build(&m, &cfg, &bad), SC_ERR_INVALID_ARGUMENT);
         sc_bvh_free(ref);
+        sc_bvh_free(refit);
     }
+    free(moved);
     free_soup(&big);
 }
 

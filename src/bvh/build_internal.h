@@ -44,6 +44,8 @@ typedef struct bvh_builder {
  * pool. fn takes work from arg until none is left; if a thread cannot be
  * started the others do its share. */
 void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t extra);
+/* A configuration's thread count: 0 becomes the online CPUs (at most SC_BVH_MAX_THREADS). */
+int sc_build_threads(int cfg_threads);
 
 /* Writes the subtrees the write pass deferred, on up to `threads` threads. */
 void sc_collapse_jobs(bvh_builder *B, int threads);

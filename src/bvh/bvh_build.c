@@ -33,6 +33,14 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
     cfg->quality = SC_BUILD_QUALITY_MEDIUM;
 }
 
+int sc_build_threads(int cfg_threads)
+{
+    if (cfg_threads != 0)
+        return cfg_threads;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    return cpus < 1 ? 1 : cpus > SC_BVH_MAX_THREADS ? SC_BVH_MAX_THREADS : (int)cpus;
+}
+
 void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t extra)
 {
     pthread_t th[SC_BVH_MAX_THREADS];
@@ -170,11 +178,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     bvh->mesh_count = mesh_count;
     first = NULL;
 
-    int threads = cfg.threads;
-    if (threads == 0) {
-        long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cpus < 1 ? 1 : cpus > SC_BVH_MAX_THREADS ? SC_BVH_MAX_THREADS : (int)cpus;
-    }
+    const int threads = sc_build_threads(cfg.threads);
     /* Every triangle's box at its own index, in chunks on the threads; a
      * triangle with a non-finite vertex is marked and then left out (the
      * others keep their order). */

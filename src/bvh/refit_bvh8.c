@@ -5,17 +5,84 @@
  * as the builder pads them); only its SAH cost can grow, which sah_cost
  * reports against built_sah_cost. */
 #include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "build_internal.h"
 
+/* The tree is refitted in two parts: the subtrees below the top
+ * REFIT_SPLIT_DEPTH levels as jobs on the build's threads, then the top
+ * levels over their boxes. The split is the same for any thread count and
+ * the SAH terms are summed in the same order (each job's own sum, then the
+ * jobs' sums in tree order), so the result does not depend on the threads. */
+#define REFIT_SPLIT_DEPTH 2
+#define REFIT_PARALLEL_MIN 65536   /* triangles: below, one thread (the same sums) */
+
+typedef struct refit_job {
+    size_t offset;       /* the subtree's root node */
+    box3 box;
+    double sah;          /* its terms, not yet divided by the root's area */
+} refit_job;
+
 typedef struct refit_ctx {
     bvh_builder B;
-    double sah;   /* not yet divided by the root's area */
+    double sah;          /* not yet divided by the root's area */
+    refit_job *jobs;     /* NULL: refit everything here */
+    size_t njobs, next;  /* collecting, then consuming in the same order */
+    atomic_size_t claim; /* the workers' next job */
 } refit_ctx;
 
-static box3 refit_node(refit_ctx *R, size_t offset)
+static void refit_store(sc_bvh_node8 *node, int i, const box3 *b)
 {
+    for (int k = 0; k < 3; k++) {
+        node->b[2 * k][i] = b->lo[k];
+        node->b[2 * k + 1][i] = b->hi[k];
+    }
+}
+
+/* The subtree at offset, all of it. */
+static box3 refit_node(const bvh_builder *B, size_t offset, double *sah)
+{
+    sc_bvh_node8 *node = (sc_bvh_node8 *)(void *)((unsigned char *)B->bvh->nodes + offset);
+    box3 all;
+    box_empty(&all);
+    for (int i = 0; i < SC_BVH_N; i++) {
+        const uint64_t c = node->child[i];
+        box3 b;
+        box_empty(&b);
+        if (c && sc_ref_is_leaf(c)) {
+            sc_leaf_refit(B, c, &b);
+            *sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
+        } else if (c) {
+            b = refit_node(B, sc_ref_offset(c), sah);
+        }
+        refit_store(node, i, &b);
+        box_grow(&all, &b);
+    }
+    *sah += (double)B->cfg->traversal_cost * box_area(&all);
+    return all;
+}
+
+/* The top levels: collect (R->jobs NULL... counting, or filling) the
+ * subtrees at REFIT_SPLIT_DEPTH, or, once they are refitted, fit the top
+ * nodes over them in the same order. */
+static box3 refit_top(refit_ctx *R, size_t offset, int depth, int collect)
+{
+    if (depth == REFIT_SPLIT_DEPTH) {
+        box3 b;
+        if (collect) {
+            if (R->jobs)
+                R->jobs[R->njobs].offset = offset;
+            R->njobs++;
+            box_empty(&b);
+        } else {
+            b = R->jobs[R->next].box;
+            R->sah += R->jobs[R->next].sah;
+            R->next++;
+        }
+        return b;
+    }
     sc_bvh_node8 *node = (sc_bvh_node8 *)(void *)((unsigned char *)R->B.bvh->nodes + offset);
     box3 all;
     box_empty(&all);
@@ -24,19 +91,34 @@ static box3 refit_node(refit_ctx *R, size_t offset)
         box3 b;
         box_empty(&b);
         if (c && sc_ref_is_leaf(c)) {
-            sc_leaf_refit(&R->B, c, &b);
-            R->sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
+            if (!collect) {
+                sc_leaf_refit(&R->B, c, &b);
+                R->sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
+            }
         } else if (c) {
-            b = refit_node(R, sc_ref_offset(c));
+            b = refit_top(R, sc_ref_offset(c), depth + 1, collect);
         }
-        for (int k = 0; k < 3; k++) {
-            node->b[2 * k][i] = b.lo[k];
-            node->b[2 * k + 1][i] = b.hi[k];
+        if (!collect) {
+            refit_store(node, i, &b);
+            box_grow(&all, &b);
         }
-        box_grow(&all, &b);
     }
-    R->sah += (double)R->B.cfg->traversal_cost * box_area(&all);
+    if (!collect)
+        R->sah += (double)R->B.cfg->traversal_cost * box_area(&all);
     return all;
+}
+
+static void *refit_work(void *arg)
+{
+    refit_ctx *R = arg;
+    for (;;) {
+        const size_t i = atomic_fetch_add(&R->claim, 1);
+        if (i >= R->njobs)
+            return NULL;
+        refit_job *j = &R->jobs[i];
+        j->sah = 0;
+        j->box = refit_node(&R->B, j->offset, &j->sah);
+    }
 }
 
 sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_count)
@@ -66,7 +148,18 @@ sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_
         return SC_OK;
     refit_ctx R = { .B = { .cfg = &bvh->cfg, .meshes = meshes, .mesh_count = mesh_count, .first = bvh->first,
                            .bvh = bvh } };
-    const box3 root = refit_node(&R, 0);
+    refit_top(&R, 0, 0, 1);
+    R.jobs = malloc((R.njobs ? R.njobs : 1) * sizeof *R.jobs);
+    if (!R.jobs)
+        return SC_ERR_OUT_OF_MEMORY;
+    R.njobs = 0;
+    refit_top(&R, 0, 0, 1);
+    atomic_init(&R.claim, 0);
+    const size_t tris = (size_t)bvh->first[mesh_count];
+    sc_build_run_workers(refit_work, &R, tris >= REFIT_PARALLEL_MIN ? sc_build_threads(bvh->cfg.threads) : 1,
+                         R.njobs);
+    const box3 root = refit_top(&R, 0, 0, 0);
+    free(R.jobs);
     float area = box_area(&root);
     if (!(area > 0))
         area = 1;
