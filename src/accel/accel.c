@@ -582,7 +582,7 @@ static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const flo
         return SC_OK;
     }
     if (a->ninst && a->top_nodes) {
-        sc_top_trace_packet(&a->top, lanes, rows, W, out, any, st);
+        sc_kernels_active()->trace[0].top_packet(&a->top, lanes, rows, W, out, any, st);
     } else {
         /* nothing to hit */
         for (uint32_t e = lanes; e; e &= e - 1) {

@@ -49,6 +49,11 @@ typedef struct sc_trace_kernels {
      * row: hit holds a miss on entry. */
     void (*top_closest)(const struct sc_top *top, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
     int (*top_any)(const struct sc_top *top, const sc_ray *ray, sc_trace_stats *st);
+    /* Lanes `lanes` (checked rays) of a W-lane packet (W = 8 or 16; rows
+     * as sc_trace_packet_lanes, trace_packet.h) through the top level
+     * (traverse_top_packet.h); out: the hit packet or W int32_t. */
+    void (*top_packet)(const struct sc_top *top, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                       sc_trace_stats *st);
 } sc_trace_kernels;
 
 /* [sc_tri_test]. The x86 tables exist only in x86 builds. */

@@ -50,19 +50,4 @@ typedef struct sc_stream_target {
 sc_status sc_stream_run(const sc_stream_target *t, const sc_ray *rays, size_t ray_stride, void *out,
                         size_t out_stride, size_t n, sc_trace_stats *stats, int any);
 
-/* Lanes `lanes` (checked rays) of a W-lane packet (W = 8 or 16) through
- * the top level of a two-level scene (trace_top.h): the packet walks the
- * top tree, each lane testing the grown boxes (sc_top_slab), and at an
- * instance the lanes that reached it go on as one packet of object-space
- * rays (sc_top_object_ray) through sc_trace_packet_lanes, each with its
- * closest hit so far as tmax. Lane i's answer is bit for bit what the
- * single-ray top kernel gives for ray i: of the hits the smallest t, then
- * (inst, geom, prim), whatever order the instances are reached in. out:
- * the hit packet (closest; the lanes' misses are written here first) or W
- * int32_t (any). Statistics count the packet's top nodes and the object
- * packets' counters, not the rays (the caller counts each ray once). */
-struct sc_top;
-void sc_top_trace_packet(const struct sc_top *top, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
-                         sc_trace_stats *stats);
-
 #endif

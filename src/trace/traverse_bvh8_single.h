@@ -339,8 +339,9 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 /* The top level of two-level scenes on this level's node test and
  * kernels (SC_TOP_TABLE: this level's table). */
 #include "traverse_top_bvh8.h"
+#include "traverse_top_packet.h"
 
-#define SC_TRACE_TOP , .top_closest = top_closest, .top_any = top_any
+#define SC_TRACE_TOP , .top_closest = top_closest, .top_any = top_any, .top_packet = top_packet
 
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
