@@ -976,6 +976,24 @@ static void test_packets(void **state)
             }
             assert_int_equal(sc_isa_force(start), SC_OK);
         }
+        /* no valid lane: nothing read (all NaN here), nothing written */
+        {
+            sc_ray_packet16 none;
+            int32_t novalid[16] = { 0 }, occ_none[16];
+            sc_hit_packet16 h_none;
+            memset(&none, 0xff, sizeof none);
+            memset(&h_none, 0x5a, sizeof h_none);
+            memset(occ_none, 0x5a, sizeof occ_none);
+            sc_hit_packet16 h_want;
+            memcpy(&h_want, &h_none, sizeof h_want);
+            for (int sc = 0; sc < 2; sc++) {
+                assert_int_equal(sc_accel_closest16(scenes[sc], novalid, &none, &h_none, NULL), SC_OK);
+                assert_int_equal(sc_accel_any16(scenes[sc], novalid, &none, occ_none, NULL), SC_OK);
+                assert_memory_equal(&h_none, &h_want, sizeof h_want);
+                for (int i = 0; i < 16; i++)
+                    assert_int_equal(occ_none[i], 0x5a5a5a5a);
+            }
+        }
         /* refused: a misaligned packet, a valid lane with a bad ray, an uncommitted scene */
         _Alignas(64) unsigned char buf[sizeof(sc_ray_packet16) + 64];
         sc_ray_packet16 *bad = (sc_ray_packet16 *)(void *)(buf + 4);

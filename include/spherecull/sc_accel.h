@@ -159,8 +159,9 @@ SC_API sc_status sc_accel_any(const sc_accel *accel, const sc_ray *ray, int *occ
  * valid lanes, alignment and errors): lane i is bit for bit what
  * sc_accel_closest / sc_accel_any returns for ray i. Through instances the
  * packet walks the top tree together, and the lanes that reach an instance
- * go through its tree as one packet of object-space rays, each with its
- * closest hit so far as its end. Pays for coherent rays (a camera tile,
+ * go through its tree as one packet of object-space rays (where the packet
+ * is wide next to the instance, lane by lane). A packet without a valid
+ * lane is a no-op. Pays for coherent rays (a camera tile,
  * shadow rays of a tile to one light), as sc_trace.h's packets do. */
 SC_API sc_status sc_accel_closest8(const sc_accel *accel, const int32_t valid[8], const sc_ray_packet8 *rays,
                                    sc_hit_packet8 *hits, sc_trace_stats *stats);

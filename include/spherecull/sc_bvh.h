@@ -151,7 +151,9 @@ SC_API void sc_bvh_free(sc_bvh *bvh);
  * growth). Errors, the BVH left as it was: INVALID_ARGUMENT (NULL, another
  * triangle count, bad layout, index out of range), NONFINITE (a triangle
  * with a non-finite vertex now, or one left out of the build for it:
- * rebuild). Threads: no thread may trace the BVH during a refit. */
+ * rebuild). Threads: no thread may trace the BVH during a refit; a tree of
+ * 65,536 triangles or more is refitted on the configuration's build threads
+ * (sc_bvh_config.threads), with the same result for any number of them. */
 SC_API sc_status sc_bvh_refit(sc_bvh *bvh, const sc_mesh_view *mesh);
 SC_API sc_status sc_bvh_get_info(const sc_bvh *bvh, sc_bvh_info *info);
 

@@ -568,6 +568,8 @@ static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const flo
     if (lanes64 < 0)
         return SC_ERR_INVALID_ARGUMENT;
     const uint32_t lanes = (uint32_t)lanes64;
+    if (!lanes)
+        return SC_OK;   /* nothing to trace, nothing read or written */
     if (!a->ninst && a->bvh) {
         /* one tree: the packet kernels, ids mapped to (geom, prim) */
         sc_trace_packet_lanes(a->bvh, lanes, rows, W, out, any, st);

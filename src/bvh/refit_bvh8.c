@@ -6,7 +6,6 @@
  * reports against built_sah_cost. */
 #include <math.h>
 #include <stdatomic.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "build_internal.h"
@@ -25,11 +24,15 @@ typedef struct refit_job {
     double sah;          /* its terms, not yet divided by the root's area */
 } refit_job;
 
+/* 8-wide nodes at depth REFIT_SPLIT_DEPTH (the root is 0): at most 8 x 8 */
+#define REFIT_MAX_JOBS (SC_BVH_N * SC_BVH_N)
+_Static_assert(REFIT_SPLIT_DEPTH == 2, "REFIT_MAX_JOBS counts the nodes at depth 2");
+
 typedef struct refit_ctx {
     bvh_builder B;
     double sah;          /* not yet divided by the root's area */
-    refit_job *jobs;     /* NULL: refit everything here */
-    size_t njobs, next;  /* collecting, then consuming in the same order */
+    refit_job jobs[REFIT_MAX_JOBS];
+    size_t njobs, next;  /* collected by the first walk, consumed in the same order by the second */
     atomic_size_t claim; /* the workers' next job */
 } refit_ctx;
 
@@ -64,17 +67,14 @@ static box3 refit_node(const bvh_builder *B, size_t offset, double *sah)
     return all;
 }
 
-/* The top levels: collect (R->jobs NULL... counting, or filling) the
- * subtrees at REFIT_SPLIT_DEPTH, or, once they are refitted, fit the top
- * nodes over them in the same order. */
+/* The top levels: collect the subtrees at REFIT_SPLIT_DEPTH, or, once
+ * they are refitted, fit the top nodes over them in the same order. */
 static box3 refit_top(refit_ctx *R, size_t offset, int depth, int collect)
 {
     if (depth == REFIT_SPLIT_DEPTH) {
         box3 b;
         if (collect) {
-            if (R->jobs)
-                R->jobs[R->njobs].offset = offset;
-            R->njobs++;
+            R->jobs[R->njobs++].offset = offset;
             box_empty(&b);
         } else {
             b = R->jobs[R->next].box;
@@ -149,17 +149,11 @@ sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_
     refit_ctx R = { .B = { .cfg = &bvh->cfg, .meshes = meshes, .mesh_count = mesh_count, .first = bvh->first,
                            .bvh = bvh } };
     refit_top(&R, 0, 0, 1);
-    R.jobs = malloc((R.njobs ? R.njobs : 1) * sizeof *R.jobs);
-    if (!R.jobs)
-        return SC_ERR_OUT_OF_MEMORY;
-    R.njobs = 0;
-    refit_top(&R, 0, 0, 1);
     atomic_init(&R.claim, 0);
     const size_t tris = (size_t)bvh->first[mesh_count];
     sc_build_run_workers(refit_work, &R, tris >= REFIT_PARALLEL_MIN ? sc_build_threads(bvh->cfg.threads) : 1,
                          R.njobs);
     const box3 root = refit_top(&R, 0, 0, 0);
-    free(R.jobs);
     float area = box_area(&root);
     if (!(area > 0))
         area = 1;

@@ -123,7 +123,11 @@ static inline float sc_top_tmax(const sc_hitrec *best, float ray_tmax)
  * one): so an item of that test is traced to the ray's own end, making
  * its answer the same whatever was found before it, and the smallest t
  * over the items does not depend on the order they are visited in. The
- * other tests' t does not depend on tmax, which only filters. */
+ * other tests' t does not depend on tmax, which only filters. Items are
+ * still culled by their boxes against sc_top_tmax: a reported t lies
+ * within a few ulps of the exact t, which is at least the box's entry,
+ * and the culling test's slack (E |1/d| and the relative 2^-21) is far
+ * larger than that. */
 static inline float sc_top_item_tmax(const sc_bvh *b, const sc_hitrec *best, float ray_tmax)
 {
     return b->cfg.tri_test == SC_TRI_EXACT ? ray_tmax : sc_top_tmax(best, ray_tmax);
@@ -137,8 +141,10 @@ static inline void sc_top_normal(const float *cof, float ng[3])
 }
 
 /* The top node test with every box grown by E, in the arithmetic of
- * sc_slab_par (node_bvh8_slab.h; no FMA, so it runs on every level, and
- * parallel rays take it on every level): (plane - o) * fl(1/d) - Ek, with
+ * sc_slab_par (node_bvh8_slab.h; no FMA, so it runs on every level): the
+ * single-ray walk takes it for parallel rays, the packet walk
+ * (traverse_top_packet.h, written over the lanes) for every ray.
+ * (plane - o) * fl(1/d) - Ek, with
  * Ek = E |1/d_k|, carries at most 4u of |plane - o| |1/d| <= (m + E) |1/d|,
  * under a fifth of Ek since E >= 20u m (kappa >= 3 for Frobenius norms);
  * the last rounding is covered by the relative 2^-21 and the absolute

@@ -3,7 +3,8 @@
  * (traverse_top_bvh8.h: top_closest, top_any, SC_TOP_TABLE). The packet
  * walks the top tree together; the lanes that reach an instance go through
  * its tree as one packet of object rays (sc_trace_packet_lanes), each
- * ending at its closest hit so far. The per-lane work (set-up, box tests,
+ * ending where sc_top_item_tmax says (one float past its closest hit so
+ * far, or the ray's own end for the exact test). The per-lane work (set-up, box tests,
  * object rays) is written over the lanes in rows, so the ISA's vectors take
  * 4, 8 or 16 lanes at a time. Lane i's answer is bit for bit the single-ray
  * top kernel's for ray i (of the hits the smallest t, then inst, geom,
@@ -249,11 +250,13 @@ SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, u
 
 /* Lanes `lanes` (checked rays) of a W-lane packet (rows as
  * sc_trace_packet_lanes) through the top level; out as there (closest: the
- * lanes' misses written first). Statistics: the packet's top nodes and the
+ * traced lanes' hits, misses included, written at the end). Statistics: the packet's top nodes and the
  * object packets' counters, not the rays (the caller counts each once). */
 static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
                                  sc_trace_stats *st)
 {
+    if (!lanes)
+        return;
     top_pk P;
     P.T = T, P.W = W, P.any = any, P.st = st, P.active = lanes;
     P.occluded = any ? out : NULL;
