@@ -308,6 +308,23 @@ static void test_parallel_build(void **state)
         cfg.prefilter = modes[md];
         cfg.quality = md == 3 ? SC_BUILD_QUALITY_HIGH : SC_BUILD_QUALITY_MEDIUM;
         assert_int_equal(sc_bvh_build(&m, &cfg, &ref), SC_OK);
+        if (md == 0) {
+            /* a tree this large is built as jobs below its top levels:
+             * its answers are those of every triangle tested */
+            enum { NR = 120 };
+            sc_ray rays[NR];
+            make_rays(78, rays, NR);
+            size_t hits = 0;
+            for (int i = 0; i < NR; i++) {
+                sc_hitrec h, hb;
+                assert_int_equal(sc_trace_closest(ref, &rays[i], &h, NULL), SC_OK);
+                assert_int_equal(sc_trace_closest_brute(ref, &rays[i], &hb), SC_OK);
+                assert_int_equal(h.prim, hb.prim);
+                assert_memory_equal(&h.t, &hb.t, sizeof h.t);
+                hits += h.prim != SC_HITREC_MISS;
+            }
+            assert_true(hits > NR / 4);
+        }
         sc_bvh *refit = NULL;
         assert_int_equal(sc_bvh_build(&m, &cfg, &refit), SC_OK);
         assert_int_equal(sc_bvh_refit(refit, &mv), SC_OK);

@@ -89,7 +89,7 @@ void sc_accel_release(sc_accel *a)
     free(a->views);
     free(a->copies);
     free(a->inst);
-    free((void *)a->top.nodes);
+    sc_free_large((void *)a->top.nodes);
     free(a->items);
     sc_bvh_free(a->bvh);
     free(a);
@@ -338,7 +338,7 @@ static uint64_t top_collapse(top_builder *T, const uint32_t *kids_in, int nk)
 
 static sc_status build_top(sc_accel *a)
 {
-    free((void *)a->top.nodes);
+    sc_free_large((void *)a->top.nodes);
     free(a->items);
     a->items = NULL;
     a->top_nodes = 0;

@@ -25,17 +25,25 @@ typedef struct bvh_builder {
     int max_depth;
     double sah;
     float root_area;
-    /* Parallel write pass: the measuring pass records every subtree whose
-     * 8-wide node lies at depth SC_COLLAPSE_JOB_DEPTH (its binary children and
-     * the node and leaf counters before and after it); the write pass leaves
-     * those subtrees to sc_collapse_jobs, which writes them on threads from
-     * the recorded counters into disjoint node and leaf ranges. */
+    /* Subtrees as jobs (a tree of SC_SAH_PARALLEL_MIN primitives or more,
+     * whatever the thread count): every subtree whose 8-wide node lies at
+     * depth SC_COLLAPSE_JOB_DEPTH is recorded by a first walk of the top
+     * levels (record: its binary children, nothing below), measured on
+     * the threads from zero counters (sc_collapse_measure_jobs), placed by
+     * a second walk (defer: its nodes next in the node order, its leaves
+     * from the next 64-byte boundary, so that their alignment is the one
+     * measured, and its figures added in tree order), and written on the
+     * threads at those places (sc_collapse_jobs). */
     int record, defer;
     size_t njobs, next_job;
     struct collapse_job {
         uint32_t kids[2];
         int nk;
-        size_t node_in, leaf_in, node_out, leaf_out;
+        size_t node_in, leaf_in;      /* where it is placed */
+        /* measured from zero: */
+        size_t nodes, leaf_bytes, sphere_used, leaves_emitted, leaves_spheres;
+        double sah;
+        int max_depth;
     } jobs[SC_COLLAPSE_JOBS];
 } bvh_builder;
 
@@ -47,7 +55,9 @@ void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t ex
 /* A configuration's thread count: 0 becomes the online CPUs (at most SC_BVH_MAX_THREADS). */
 int sc_build_threads(int cfg_threads);
 
-/* Writes the subtrees the write pass deferred, on up to `threads` threads. */
+/* Measures the recorded subtrees, then writes them where the placing walk
+ * put them, each on up to `threads` threads. */
+void sc_collapse_measure_jobs(bvh_builder *B, int threads);
 void sc_collapse_jobs(bvh_builder *B, int threads);
 
 static inline const float *vtx(const bvh_builder *B, uint32_t tri, int corner)

@@ -219,34 +219,42 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
             bvh->root_lo[k] = B.bn[root].box.lo[k];
             bvh->root_hi[k] = B.bn[root].box.hi[k];
         }
-        /* Pass 1 measures, pass 2 writes with the same traversal order; on
-         * several threads pass 2 writes the subtrees pass 1 recorded in
-         * parallel (the same bytes: each starts from its recorded counters),
-         * and the figures are pass 1's. */
+        /* Measure, then write in the same order. A large tree does both
+         * for its subtrees below the top levels as jobs on the threads
+         * (build_internal.h): walks of the top levels record them, place
+         * them after they are measured, and write around them. The jobs
+         * and their places do not depend on the thread count, nor do the
+         * figures, summed in tree order; so neither do the bytes. */
         B.bvh = bvh;
-        const int parallel = threads > 1 && used >= SC_SAH_PARALLEL_MIN;
+        const int jobs = used >= SC_SAH_PARALLEL_MIN;
+        const sc_bnode *r = &B.bn[root];
+        const uint32_t kids[2] = { r->a, r->b };
+        const int walks = jobs ? 3 : 2;
         bvh_builder measured = B;
-        for (int pass = 0; pass < 2; pass++) {
-            B.dry = pass == 0;
-            B.record = parallel && pass == 0;
-            B.defer = parallel && pass == 1;
+        B.njobs = 0;
+        for (int walk = 0; walk < walks; walk++) {
+            /* jobs: record, place (measured), place and write; else measure, write */
+            const int write = walk == walks - 1;
+            B.dry = !write;
+            B.record = jobs && walk == 0;
+            B.defer = jobs && walk > 0;
             B.next_job = 0;
             B.node_used = B.leaf_used = B.sphere_used = B.leaves_emitted = B.leaves_spheres = 0;
             B.sah = 0;
             B.max_depth = 0;
-            const sc_bnode *r = &B.bn[root];
-            uint32_t kids[2] = { r->a, r->b };
             if (r->leaf)
                 sc_collapse_bvh8(&B, &root, 1, 1);
             else
                 sc_collapse_bvh8(&B, kids, 2, 1);
-            if (pass == 1 && parallel) {
-                sc_collapse_jobs(&B, threads);
+            if (B.record)
+                sc_collapse_measure_jobs(&B, threads);
+            if (write) {
+                if (jobs)
+                    sc_collapse_jobs(&B, threads);
                 B.sah = measured.sah, B.max_depth = measured.max_depth;
                 B.leaves_emitted = measured.leaves_emitted, B.leaves_spheres = measured.leaves_spheres;
                 B.sphere_used = measured.sphere_used;
-            }
-            if (pass == 0) {
+            } else if (walk == walks - 2) {
                 measured = B;
                 /* Nodes and leaves in one block: a tree of 2 MiB or more
                  * gets huge pages for its nodes too (sc_mem.h). */
@@ -256,8 +264,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
                 if (!block)
                     goto fail;
                 bvh->nodes = (sc_bvh_node8 *)(void *)block;
-                bvh->leaves = block + node_bytes;
-                memset(bvh->leaves, 0, leaf_bytes);
+                bvh->leaves = block + node_bytes;   /* zero: the gaps between leaves stay so */
             }
         }
         root_nodes = B.node_used;
@@ -292,7 +299,7 @@ void sc_bvh_free(sc_bvh *bvh)
 {
     if (!bvh)
         return;
-    free(bvh->nodes);         /* and the leaves, in the same block */
+    sc_free_large(bvh->nodes);   /* and the leaves, in the same block */
     free(bvh->first);
     free(bvh);
 }

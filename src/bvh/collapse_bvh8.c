@@ -12,20 +12,27 @@ static uint64_t collapse_node(bvh_builder *B, const uint32_t *kids_in, int nk_in
 
 uint64_t sc_collapse_bvh8(bvh_builder *B, const uint32_t *kids_in, int nk_in, int depth)
 {
-    if (depth == SC_COLLAPSE_JOB_DEPTH && B->defer && B->next_job < B->njobs) {
-        /* the subtree the measuring pass recorded as this one */
-        const struct collapse_job *j = &B->jobs[B->next_job++];
-        B->node_used = j->node_out, B->leaf_used = j->leaf_out;
-        return (uint64_t)(j->node_in * sizeof(sc_bvh_node8));
-    }
-    if (depth == SC_COLLAPSE_JOB_DEPTH && B->record && B->njobs < SC_COLLAPSE_JOBS) {
+    if (depth == SC_COLLAPSE_JOB_DEPTH && B->record) {
+        /* the first walk: the subtree is a job, measured later */
         struct collapse_job *j = &B->jobs[B->njobs++];
         memcpy(j->kids, kids_in, sizeof(uint32_t) * (size_t)nk_in);
         j->nk = nk_in;
-        j->node_in = B->node_used, j->leaf_in = B->leaf_used;
-        const uint64_t ref = collapse_node(B, kids_in, nk_in, depth);
-        j->node_out = B->node_used, j->leaf_out = B->leaf_used;
-        return ref;
+        return 0;
+    }
+    if (depth == SC_COLLAPSE_JOB_DEPTH && B->defer) {
+        /* the placing walks: the measured subtree goes here */
+        struct collapse_job *j = &B->jobs[B->next_job++];
+        j->node_in = B->node_used;
+        j->leaf_in = (B->leaf_used + 63) / 64 * 64;
+        B->node_used += j->nodes;
+        B->leaf_used = j->leaf_in + j->leaf_bytes;
+        B->sphere_used += j->sphere_used;
+        B->leaves_emitted += j->leaves_emitted;
+        B->leaves_spheres += j->leaves_spheres;
+        B->sah += j->sah;
+        if (j->max_depth > B->max_depth)
+            B->max_depth = j->max_depth;
+        return (uint64_t)(j->node_in * sizeof(sc_bvh_node8));
     }
     return collapse_node(B, kids_in, nk_in, depth);
 }
@@ -99,6 +106,7 @@ static uint64_t collapse_node(bvh_builder *B, const uint32_t *kids_in, int nk_in
 typedef struct collapse_worker {
     bvh_builder *B;
     atomic_size_t *next;
+    int measure;
 } collapse_worker;
 
 static void *collapse_work(void *arg)
@@ -108,19 +116,42 @@ static void *collapse_work(void *arg)
         size_t k = atomic_fetch_add(w->next, 1);
         if (k >= w->B->njobs)
             return NULL;
-        /* a private builder: its counters start where the measuring pass
-         * found this subtree's, so it writes the nodes and leaves it wrote */
+        struct collapse_job *j = &w->B->jobs[k];
+        /* a private builder over the subtree: from zero counters to
+         * measure it, from its place to write it (the same bytes, as its
+         * leaves start on a 64-byte boundary either way) */
         bvh_builder L = *w->B;
         L.defer = L.record = 0;
-        L.node_used = L.jobs[k].node_in, L.leaf_used = L.jobs[k].leaf_in;
-        sc_collapse_bvh8(&L, L.jobs[k].kids, L.jobs[k].nk, SC_COLLAPSE_JOB_DEPTH);
+        L.dry = w->measure;
+        L.node_used = w->measure ? 0 : j->node_in;
+        L.leaf_used = w->measure ? 0 : j->leaf_in;
+        L.sphere_used = L.leaves_emitted = L.leaves_spheres = 0;
+        L.sah = 0;
+        L.max_depth = 0;
+        sc_collapse_bvh8(&L, j->kids, j->nk, SC_COLLAPSE_JOB_DEPTH);
+        if (w->measure) {
+            j->nodes = L.node_used, j->leaf_bytes = L.leaf_used;
+            j->sphere_used = L.sphere_used, j->leaves_emitted = L.leaves_emitted;
+            j->leaves_spheres = L.leaves_spheres;
+            j->sah = L.sah, j->max_depth = L.max_depth;
+        }
     }
+}
+
+static void run_jobs(bvh_builder *B, int threads, int measure)
+{
+    atomic_size_t next;
+    atomic_init(&next, 0);
+    collapse_worker w = { B, &next, measure };
+    sc_build_run_workers(collapse_work, &w, threads, B->njobs ? B->njobs - 1 : 0);
+}
+
+void sc_collapse_measure_jobs(bvh_builder *B, int threads)
+{
+    run_jobs(B, threads, 1);
 }
 
 void sc_collapse_jobs(bvh_builder *B, int threads)
 {
-    atomic_size_t next;
-    atomic_init(&next, 0);
-    collapse_worker w = { B, &next };
-    sc_build_run_workers(collapse_work, &w, threads, B->njobs ? B->njobs - 1 : 0);
+    run_jobs(B, threads, 0);
 }

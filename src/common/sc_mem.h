@@ -9,7 +9,9 @@
  * fresh memory takes one fault per 2 MiB instead of per 4 KiB. Embree asks
  * for the same on Linux (its `hugepages` device option, on by default).
  * Where the kernel has no transparent huge pages the advice is ignored.
- * Free with free(). */
+ * The memory is zero-filled (from 2 MiB on, fresh mapped pages: no zeroing
+ * pass, the first touch falls on the caller's writes). Free with
+ * sc_free_large. */
 #ifndef SPHERECULL_COMMON_SC_MEM_H
 #define SPHERECULL_COMMON_SC_MEM_H
 
@@ -17,5 +19,6 @@
 
 /* NULL when out of memory (bytes = 0 allocates a little). */
 void *sc_alloc_large(size_t bytes);
+void sc_free_large(void *p);   /* NULL: nothing */
 
 #endif
