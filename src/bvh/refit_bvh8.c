@@ -30,7 +30,6 @@ _Static_assert(REFIT_SPLIT_DEPTH == 2, "REFIT_MAX_JOBS counts the nodes at depth
 
 typedef struct refit_ctx {
     bvh_builder B;
-    double sah;          /* not yet divided by the root's area */
     refit_job jobs[REFIT_MAX_JOBS];
     size_t njobs, next;  /* collected by the first walk, consumed in the same order by the second */
     atomic_size_t claim; /* the workers' next job */
@@ -44,67 +43,51 @@ static void refit_store(sc_bvh_node8 *node, int i, const box3 *b)
     }
 }
 
-/* The subtree at offset, all of it. */
-static box3 refit_node(const bvh_builder *B, size_t offset, double *sah)
+/* One walk of the tree from a node at `depth`: below REFIT_SPLIT_DEPTH
+ * everything is refitted here (split < 0: no split); at it, the first
+ * walk of the top levels records the subtree as a job (collect, nothing
+ * refitted) and the second takes the job's box and SAH terms. */
+typedef struct refit_walker {
+    refit_ctx *R;
+    int split, collect;
+    double sah;
+} refit_walker;
+
+static box3 refit_walk(refit_walker *w, size_t offset, int depth)
 {
-    sc_bvh_node8 *node = (sc_bvh_node8 *)(void *)((unsigned char *)B->bvh->nodes + offset);
+    refit_ctx *R = w->R;
     box3 all;
     box_empty(&all);
-    for (int i = 0; i < SC_BVH_N; i++) {
-        const uint64_t c = node->child[i];
-        box3 b;
-        box_empty(&b);
-        if (c && sc_ref_is_leaf(c)) {
-            sc_leaf_refit(B, c, &b);
-            *sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
-        } else if (c) {
-            b = refit_node(B, sc_ref_offset(c), sah);
-        }
-        refit_store(node, i, &b);
-        box_grow(&all, &b);
-    }
-    *sah += (double)B->cfg->traversal_cost * box_area(&all);
-    return all;
-}
-
-/* The top levels: collect the subtrees at REFIT_SPLIT_DEPTH, or, once
- * they are refitted, fit the top nodes over them in the same order. */
-static box3 refit_top(refit_ctx *R, size_t offset, int depth, int collect)
-{
-    if (depth == REFIT_SPLIT_DEPTH) {
-        box3 b;
-        if (collect) {
+    if (depth == w->split) {
+        if (w->collect) {
             R->jobs[R->njobs++].offset = offset;
-            box_empty(&b);
         } else {
-            b = R->jobs[R->next].box;
-            R->sah += R->jobs[R->next].sah;
+            all = R->jobs[R->next].box;
+            w->sah += R->jobs[R->next].sah;
             R->next++;
         }
-        return b;
+        return all;
     }
     sc_bvh_node8 *node = (sc_bvh_node8 *)(void *)((unsigned char *)R->B.bvh->nodes + offset);
-    box3 all;
-    box_empty(&all);
     for (int i = 0; i < SC_BVH_N; i++) {
         const uint64_t c = node->child[i];
         box3 b;
         box_empty(&b);
         if (c && sc_ref_is_leaf(c)) {
-            if (!collect) {
+            if (!w->collect) {
                 sc_leaf_refit(&R->B, c, &b);
-                R->sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
+                w->sah += (double)box_area(&b) * leaf_blocks(sc_ref_count(c));
             }
         } else if (c) {
-            b = refit_top(R, sc_ref_offset(c), depth + 1, collect);
+            b = refit_walk(w, sc_ref_offset(c), depth + 1);
         }
-        if (!collect) {
+        if (!w->collect) {
             refit_store(node, i, &b);
             box_grow(&all, &b);
         }
     }
-    if (!collect)
-        R->sah += (double)R->B.cfg->traversal_cost * box_area(&all);
+    if (!w->collect)
+        w->sah += (double)R->B.cfg->traversal_cost * box_area(&all);
     return all;
 }
 
@@ -116,8 +99,9 @@ static void *refit_work(void *arg)
         if (i >= R->njobs)
             return NULL;
         refit_job *j = &R->jobs[i];
-        j->sah = 0;
-        j->box = refit_node(&R->B, j->offset, &j->sah);
+        refit_walker w = { R, -1, 0, 0 };
+        j->box = refit_walk(&w, j->offset, REFIT_SPLIT_DEPTH);
+        j->sah = w.sah;
     }
 }
 
@@ -148,18 +132,19 @@ sc_status sc_bvh_refit_set(sc_bvh *bvh, const sc_mesh_view *meshes, size_t mesh_
         return SC_OK;
     refit_ctx R = { .B = { .cfg = &bvh->cfg, .meshes = meshes, .mesh_count = mesh_count, .first = bvh->first,
                            .bvh = bvh } };
-    refit_top(&R, 0, 0, 1);
+    refit_walker collect = { &R, REFIT_SPLIT_DEPTH, 1, 0 }, fit = { &R, REFIT_SPLIT_DEPTH, 0, 0 };
+    refit_walk(&collect, 0, 0);
     atomic_init(&R.claim, 0);
     const size_t tris = (size_t)bvh->first[mesh_count];
     sc_build_run_workers(refit_work, &R, tris >= REFIT_PARALLEL_MIN ? sc_build_threads(bvh->cfg.threads) : 1,
                          R.njobs);
-    const box3 root = refit_top(&R, 0, 0, 0);
+    const box3 root = refit_walk(&fit, 0, 0);   /* fit.sah: not yet divided by the root's area */
     float area = box_area(&root);
     if (!(area > 0))
         area = 1;
     for (int k = 0; k < 3; k++)
         bvh->root_lo[k] = root.lo[k], bvh->root_hi[k] = root.hi[k];
-    bvh->sah_cost = R.sah / area;
+    bvh->sah_cost = fit.sah / area;
     return SC_OK;
 }
 
