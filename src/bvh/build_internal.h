@@ -36,16 +36,20 @@ typedef struct bvh_builder {
      * threads at those places (sc_collapse_jobs). */
     int record, defer;
     size_t njobs, next_job;
-    struct collapse_job {
-        uint32_t kids[2];
-        int nk;
-        size_t node_in, leaf_in;      /* where it is placed */
-        /* measured from zero: */
-        size_t nodes, leaf_bytes, sphere_used, leaves_emitted, leaves_spheres;
-        double sah;
-        int max_depth;
-    } jobs[SC_COLLAPSE_JOBS];
+    /* SC_COLLAPSE_JOBS of them, the caller's: not in this struct, which
+     * the workers copy while others write their jobs' figures */
+    struct collapse_job *jobs;
 } bvh_builder;
+
+struct collapse_job {
+    uint32_t kids[2];
+    int nk;
+    size_t node_in, leaf_in;      /* where it is placed */
+    /* measured from zero: */
+    size_t nodes, leaf_bytes, sphere_used, leaves_emitted, leaves_spheres;
+    double sah;
+    int max_depth;
+};
 
 /* Runs fn(arg) on the calling thread and on up to threads - 1 (and at most
  * extra) POSIX threads of its own, and joins them: the build steps' shared

@@ -230,8 +230,10 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
         const sc_bnode *r = &B.bn[root];
         const uint32_t kids[2] = { r->a, r->b };
         const int walks = jobs ? 3 : 2;
-        bvh_builder measured = B;
+        struct collapse_job jobs_mem[SC_COLLAPSE_JOBS];
+        B.jobs = jobs_mem;
         B.njobs = 0;
+        bvh_builder measured = B;
         for (int walk = 0; walk < walks; walk++) {
             /* jobs: record, place (measured), place and write; else measure, write */
             const int write = walk == walks - 1;
