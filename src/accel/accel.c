@@ -402,8 +402,13 @@ static sc_status build_top(sc_accel *a)
     st = SC_OK;
     if (!n)
         goto out;
-    for (int k = 0; k < 3; k++)
+    double h2 = 0;
+    for (int k = 0; k < 3; k++) {
         a->top.lo[k] = all.lo[k], a->top.hi[k] = all.hi[k];
+        a->top.center[k] = (float)(0.5 * ((double)all.lo[k] + all.hi[k]));
+        h2 += 0.25 * ((double)all.hi[k] - all.lo[k]) * ((double)all.hi[k] - all.lo[k]);
+    }
+    a->top.half = (float)sqrt(h2);
     const sc_sah_params sah = { 1, 16, 1.0f, 1 };
     size_t count;
     uint32_t root = sc_build_binned_sah(boxes, ids, n, &sah, bn, &count);
@@ -504,21 +509,13 @@ sc_status sc_accel_instance_ray(const sc_accel *a, uint32_t id, const sc_ray *ra
     return SC_OK;
 }
 
-static void miss(const sc_ray *ray, sc_hitrec *h)
-{
-    memset(h, 0, sizeof *h);
-    h->t = ray->tmax;
-    h->prim = SC_HITREC_MISS;
-    h->geom = h->inst = SC_INVALID_ID;
-}
-
 sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st)
 {
     if (!a || !ray || !hit || !a->committed || !sc_ray_valid(ray))
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst) {
         if (!a->bvh) {
-            miss(ray, hit);
+            sc_top_miss(ray->tmax, hit);
             if (st)
                 st->rays++;
             return SC_OK;
@@ -527,7 +524,7 @@ sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit,
         sc_top_map_ids(a->bvh, hit);
         return s;
     }
-    miss(ray, hit);
+    sc_top_miss(ray->tmax, hit);
     if (a->top_nodes)
         sc_kernels_active()->trace[0].top_closest(&a->top, ray, hit, st);
     if (st)
@@ -560,11 +557,7 @@ sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_t
 static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const float *rows, unsigned W, void *out,
                               int any, sc_trace_stats *st)
 {
-    const uintptr_t align = W * 4;
-    if (!a || !valid || !rows || !out || !a->committed || ((uintptr_t)rows & (align - 1)) ||
-        (!any && ((uintptr_t)out & (align - 1))))
-        return SC_ERR_INVALID_ARGUMENT;
-    const int64_t lanes64 = sc_packet_valid_lanes(valid, rows, W);
+    const int64_t lanes64 = a && a->committed ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
     if (lanes64 < 0)
         return SC_ERR_INVALID_ARGUMENT;
     const uint32_t lanes = (uint32_t)lanes64;
@@ -592,9 +585,8 @@ static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const flo
             if (any) {
                 ((int32_t *)out)[i] = 0;
             } else {
-                const sc_ray r = { { 0, 0, 0 }, 0, { 1, 0, 0 }, rows[7 * W + i] };
                 sc_hitrec h;
-                miss(&r, &h);
+                sc_top_miss(rows[7 * W + i], &h);
                 sc_hit_lane_put(out, W, i, &h);
             }
         }

@@ -40,7 +40,7 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
 /* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
  * conditions of sc_ray_valid four lanes at a time (SSE2, the x86-64
  * baseline): isfinite(d) as |d| <= FLT_MAX, which NaN fails. */
-int64_t sc_packet_valid_lanes(const int32_t *valid, const float *rows, unsigned K)
+static int64_t packet_valid_lanes(const int32_t *valid, const float *rows, unsigned K)
 {
     const float *ox = rows, *oy = rows + K, *oz = rows + 2 * K, *tmin = rows + 3 * K, *dx = rows + 4 * K,
                 *dy = rows + 5 * K, *dz = rows + 6 * K, *tmax = rows + 7 * K;
@@ -161,13 +161,18 @@ void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows,
     }
 }
 
+int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigned W, const void *out, int any)
+{
+    const uintptr_t align = W * 4;
+    if (!valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
+        return -1;
+    return packet_valid_lanes(valid, rows, W);
+}
+
 static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
                               int any, sc_trace_stats *stats)
 {
-    const uintptr_t align = W * 4;
-    if (!bvh || !valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
-        return SC_ERR_INVALID_ARGUMENT;
-    const int64_t lanes = sc_packet_valid_lanes(valid, rows, W);
+    const int64_t lanes = bvh ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
     if (lanes < 0)
         return SC_ERR_INVALID_ARGUMENT;
     sc_trace_packet_lanes(bvh, (uint32_t)lanes, rows, W, out, any, stats);

@@ -13,10 +13,12 @@
 #include "spherecull/sc_ray.h"
 #include "spherecull/sc_trace.h"
 
-/* The valid lanes of a W-lane packet (rows: ox oy oz tmin dx dy dz tmax,
- * W floats each) as a mask; -1 if a valid lane's ray is one
+/* The argument checks of a W-lane packet call (rows: ox oy oz tmin dx dy
+ * dz tmax, W floats each, W * 4-byte aligned; out: the hit packet, as
+ * aligned, or for any the int32_t array): the valid lanes as a mask, or
+ * -1 for a NULL pointer, a misaligned packet or a valid lane's ray that
  * sc_trace_closest refuses. */
-int64_t sc_packet_valid_lanes(const int32_t *valid, const float *rows, unsigned W);
+int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigned W, const void *out, int any);
 
 /* Lanes `lanes` (checked rays) of a W-lane packet (W = 8 or 16) against
  * bvh: the level's packet kernel of that width, 16 lanes as two 8-lane

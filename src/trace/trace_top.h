@@ -42,8 +42,41 @@ typedef struct sc_top {
     const sc_bvh_node8 *nodes;   /* nodes[0] is the root */
     const sc_top_item *items;
     float lo[3], hi[3];          /* the top tree's box */
+    float center[3], half;       /* the same box: centre, half diagonal (packets' coherence test) */
     double kappa, radius;
 } sc_top;
+
+/* A miss of a ray ending at tmax: what the top level starts from. */
+static inline void sc_top_miss(float tmax, sc_hitrec *h)
+{
+    memset(h, 0, sizeof *h);
+    h->t = tmax;
+    h->prim = SC_HITREC_MISS;
+    h->geom = h->inst = SC_INVALID_ID;
+}
+
+/* E below from m, the origin's largest distance from the top box's planes. */
+static inline double sc_top_growth(const sc_top *T, double m)
+{
+    return 0x1p-23 * T->kappa * (3.4642 * m + T->radius) * 1.01 + 0x1p-120;
+}
+
+/* The growth of the slab distances on an axis with reciprocal rd: E |rd|, rounded up. */
+static inline float sc_top_ek(double E, float rd)
+{
+    return (float)(E * fabs((double)rd) * (1 + 0x1p-20));
+}
+
+/* Row `row` of the world-to-object transform on a point and on a
+ * direction, in double, rounded once (the object ray's components). */
+static inline float sc_top_xfm_point(const double *row, double x, double y, double z)
+{
+    return (float)(row[0] * x + row[1] * y + row[2] * z + row[3]);
+}
+static inline float sc_top_xfm_dir(const double *row, double x, double y, double z)
+{
+    return (float)(row[0] * x + row[1] * y + row[2] * z);
+}
 
 /* E of the comment above for ray r; m is returned for the set-up. */
 static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out)
@@ -55,16 +88,15 @@ static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out
         m = dh > m ? dh : m;
     }
     *m_out = m;
-    return 0x1p-23 * T->kappa * (3.4642 * m + T->radius) * 1.01 + 0x1p-120;
+    return sc_top_growth(T, m);
 }
 
 /* The object-space ray of an item: M^-1 (o - T), M^-1 d in double, rounded once. */
 static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
 {
     for (int i = 0; i < 3; i++) {
-        const double *row = inv + 4 * i;
-        o->org[i] = (float)(row[0] * r->org[0] + row[1] * r->org[1] + row[2] * r->org[2] + row[3]);
-        o->dir[i] = (float)(row[0] * r->dir[0] + row[1] * r->dir[1] + row[2] * r->dir[2]);
+        o->org[i] = sc_top_xfm_point(inv + 4 * i, r->org[0], r->org[1], r->org[2]);
+        o->dir[i] = sc_top_xfm_dir(inv + 4 * i, r->dir[0], r->dir[1], r->dir[2]);
     }
     o->tmin = r->tmin;
     o->tmax = r->tmax;
@@ -162,7 +194,7 @@ static inline void sc_top_ray_setup(const sc_ray *r, double E, sc_top_ray *t)
     for (int k = 0; k < 3; k++) {
         t->org[k] = r->org[k];
         t->rd[k] = 1.0f / r->dir[k];
-        t->Ek[k] = (float)(E * fabs((double)t->rd[k]) * (1 + 0x1p-20));
+        t->Ek[k] = sc_top_ek(E, t->rd[k]);
         const int neg = signbit(r->dir[k]) != 0;
         t->near_row[k] = 2 * k + neg;
         t->far_row[k] = 2 * k + 1 - neg;

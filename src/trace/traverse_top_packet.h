@@ -101,15 +101,11 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     int32_t valid[16];
     if (it->inv) {
         const double *m = it->inv;
-        for (int l = 0; l < 16; l++) {
-            const double x = P->o[0][l], y = P->o[1][l], z = P->o[2][l];
-            const double u = P->d[0][l], v = P->d[1][l], w = P->d[2][l];
+        for (int l = 0; l < 16; l++)
             for (int i = 0; i < 3; i++) {
-                const double *row = m + 4 * i;
-                rows[i][l] = (float)(row[0] * x + row[1] * y + row[2] * z + row[3]);
-                rows[4 + i][l] = (float)(row[0] * u + row[1] * v + row[2] * w);
+                rows[i][l] = sc_top_xfm_point(m + 4 * i, P->o[0][l], P->o[1][l], P->o[2][l]);
+                rows[4 + i][l] = sc_top_xfm_dir(m + 4 * i, P->d[0][l], P->d[1][l], P->d[2][l]);
             }
-        }
         /* sc_ray_valid of each object ray */
         for (int l = 0; l < 16; l++) {
             int ok = 1;
@@ -274,20 +270,11 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         if (any) {
             P.occluded[l] = 0;
         } else {
-            sc_hitrec *h = &P.best[l];
-            memset(h, 0, sizeof *h);
-            h->t = P.tmax[l];
-            h->prim = SC_HITREC_MISS;
-            h->geom = h->inst = SC_INVALID_ID;
+            sc_top_miss(P.tmax[l], &P.best[l]);
         }
     }
     top_pk_spread(&P, lanes);
-    float c[3], h2 = 0;
-    for (int k = 0; k < 3; k++) {
-        c[k] = 0.5f * (T->lo[k] + T->hi[k]);
-        h2 += 0.25f * (T->hi[k] - T->lo[k]) * (T->hi[k] - T->lo[k]);
-    }
-    if (!top_pk_narrow(&P, c, sqrtf(h2))) {
+    if (!top_pk_narrow(&P, T->center, T->half)) {
         /* wide against the whole scene: lane by lane through the single-ray top level */
         for (uint32_t e = lanes; e; e &= e - 1) {
             const unsigned l = (unsigned)__builtin_ctz(e);
@@ -308,10 +295,10 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             m = dl > m ? dl : m;
             m = dh > m ? dh : m;
         }
-        const double E = 0x1p-23 * T->kappa * (3.4642 * m + T->radius) * 1.01 + 0x1p-120;
+        const double E = sc_top_growth(T, m);
         for (int k = 0; k < 3; k++) {
             P.rd[k][l] = 1.0f / P.d[k][l];
-            P.Ek[k][l] = (float)(E * fabs((double)P.rd[k][l]) * (1 + 0x1p-20));
+            P.Ek[k][l] = sc_top_ek(E, P.rd[k][l]);
             P.neg[k][l] = signbit(P.d[k][l]) != 0;
         }
         P.tcull[l] = P.tmax[l];
