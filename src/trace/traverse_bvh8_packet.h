@@ -299,13 +299,17 @@ SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 
  * lane's best t so far; a hit replaces the lane's best by the (t, prim)
  * order. The single kernel returns u and v divided out: den = 1. */
 SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref, uint32_t m, pvec *tmaxv,
-                                  pvec *bun, pvec *bvn, pvec *bden, uint32_t *bprim, float (*bng)[PK],
+                                  pvec *bun, pvec *bvn, pvec *bden, pvec *bprimv, pvec *bng, uint32_t *got,
                                   uint32_t *alive, sc_trace_stats *st, const int ANY, const int STATS)
 {
-    float tm[PK], un[PK], vn[PK], dn[PK];
+    float tm[PK], un[PK], vn[PK], dn[PK], ng[3][PK];
+    uint32_t bprim[PK];
     PV(store)(tm, *tmaxv);
-    if (!ANY)
+    if (!ANY) {
         PV(store)(un, *bun), PV(store)(vn, *bvn), PV(store)(dn, *bden);
+        PV(store)((float *)(void *)bprim, *bprimv);
+        PV(store)(ng[0], bng[0]), PV(store)(ng[1], bng[1]), PV(store)(ng[2], bng[2]);
+    }
     for (; m; m &= m - 1) {
         const unsigned l = (unsigned)__builtin_ctz(m);
         const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, tm[l] };
@@ -326,12 +330,15 @@ SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref,
         } else if (h.prim != SC_HITREC_MISS && (h.t < tm[l] || h.prim < bprim[l])) {
             tm[l] = h.t, un[l] = h.u, vn[l] = h.v, dn[l] = 1;
             bprim[l] = h.prim;
-            bng[0][l] = h.ng[0], bng[1][l] = h.ng[1], bng[2][l] = h.ng[2];
+            ng[0][l] = h.ng[0], ng[1][l] = h.ng[1], ng[2][l] = h.ng[2];
+            *got |= 1u << l;
         }
     }
     if (!ANY) {
         *tmaxv = PV(load)(tm);
         *bun = PV(load)(un), *bvn = PV(load)(vn), *bden = PV(load)(dn);
+        *bprimv = PV(load)((const float *)(const void *)bprim);
+        bng[0] = PV(load)(ng[0]), bng[1] = PV(load)(ng[1]), bng[2] = PV(load)(ng[2]);
     }
 }
 
@@ -351,10 +358,11 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
     float tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
     /* the best hit so far per lane (closest): its t is tmaxv */
     pvec bun = PV(set1)(0), bvn = PV(set1)(0), bden = PV(set1)(1);
-    uint32_t bprim[PK] __attribute__((aligned(64)));
-    float bng[3][PK];             /* its geometric normal (sc_leaf_normal) */
-    for (unsigned i = 0; i < PK; i++)
-        bprim[i] = SC_HITREC_MISS;
+    /* its primitive id (bit patterns in float lanes) and geometric normal
+     * (sc_leaf_normal); got: the lanes that have one */
+    pvec bprimv = PV(set1_bits)(SC_HITREC_MISS);
+    pvec bng[3] = { PV(set1)(0), PV(set1)(0), PV(set1)(0) };
+    uint32_t got = 0;
     uint32_t alive = lanes;       /* any: lanes not yet occluded */
     PFN(pk_entry) stack[SC_TRACE_STACK];
     int sp = 0;
@@ -376,7 +384,8 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             if (__builtin_popcount(m) <= SC_PACKET_THIN) {
                 /* a thin packet: its lanes finish this subtree as single
                  * rays, each bounded by its own best hit so far */
-                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, bprim, bng, &alive, st, ANY, STATS);
+                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, &bprimv, bng, &got, &alive, st,
+                               ANY, STATS);
                 goto pop;
             }
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
@@ -545,24 +554,27 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     } else {
                         /* of equal t the smaller primitive id */
                         uint32_t upd = h & PV(bits)(PV(lt)(tt, tmaxv));
-                        for (uint32_t e = h & ~upd; e; e &= e - 1) {
-                            unsigned l = (unsigned)__builtin_ctz(e);
-                            if (prims[i] < bprim[l])
-                                upd |= 1u << l;
+                        if (h & ~upd) {
+                            uint32_t bprim[PK];
+                            PV(store)((float *)(void *)bprim, bprimv);
+                            for (uint32_t e = h & ~upd; e; e &= e - 1) {
+                                unsigned l = (unsigned)__builtin_ctz(e);
+                                if (prims[i] < bprim[l])
+                                    upd |= 1u << l;
+                            }
                         }
-                        const PV(m) um = PV(mask_from_bits)(upd);
-                        tmaxv = PV(sel)(um, tt, tmaxv);
-                        bun = PV(sel)(um, V, bun);
-                        bvn = PV(sel)(um, Wv, bvn);
-                        bden = PV(sel)(um, det, bden);
                         if (upd) {
+                            const PV(m) um = PV(mask_from_bits)(upd);
                             float ng[3];
                             sc_leaf_normal(rows, W, i, ng);
-                            for (uint32_t e = upd; e; e &= e - 1) {
-                                const unsigned l = (unsigned)__builtin_ctz(e);
-                                bprim[l] = prims[i];
-                                bng[0][l] = ng[0], bng[1][l] = ng[1], bng[2][l] = ng[2];
-                            }
+                            tmaxv = PV(sel)(um, tt, tmaxv);
+                            bun = PV(sel)(um, V, bun);
+                            bvn = PV(sel)(um, Wv, bvn);
+                            bden = PV(sel)(um, det, bden);
+                            bprimv = PV(sel)(um, PV(set1_bits)(prims[i]), bprimv);
+                            for (int k = 0; k < 3; k++)
+                                bng[k] = PV(sel)(um, PV(set1)(ng[k]), bng[k]);
+                            got |= upd;
                         }
                     }
                 }
@@ -570,11 +582,14 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     /* an exactly zero edge function: sc_watertight_double
                      * per lane, as the single ray does */
                     float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
-                    float tm[PK], un[PK], vn[PK], dn[PK];
+                    float tm[PK], un[PK], vn[PK], dn[PK], ngl[3][PK];
+                    uint32_t bprim[PK];
                     PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
                     PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, Az), PV(store)(bz, Bz);
                     PV(store)(cz, Cz), PV(store)(tm, tmaxv), PV(store)(un, bun), PV(store)(vn, bvn);
-                    PV(store)(dn, bden);
+                    PV(store)(dn, bden), PV(store)((float *)(void *)bprim, bprimv);
+                    for (int k = 0; k < 3; k++)
+                        PV(store)(ngl[k], bng[k]);
                     for (uint32_t e = zr; e; e &= e - 1) {
                         unsigned l = (unsigned)__builtin_ctz(e);
                         float t, u, v;
@@ -591,10 +606,14 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                             bprim[l] = prims[i];
                             float ng[3];
                             sc_leaf_normal(rows, W, i, ng);
-                            bng[0][l] = ng[0], bng[1][l] = ng[1], bng[2][l] = ng[2];
+                            ngl[0][l] = ng[0], ngl[1][l] = ng[1], ngl[2][l] = ng[2];
+                            got |= 1u << l;
                         }
                     }
                     tmaxv = PV(load)(tm), bun = PV(load)(un), bvn = PV(load)(vn), bden = PV(load)(dn);
+                    bprimv = PV(load)((const float *)(const void *)bprim);
+                    for (int k = 0; k < 3; k++)
+                        bng[k] = PV(load)(ngl[k]);
                 }
             }
             if (UNI && !ANY && c->frustum)
@@ -620,23 +639,22 @@ done:
         return;
     }
     {
-        float tm[PK], u[PK], v[PK];
-        PV(store)(tm, tmaxv);
-        PV(store)(u, PV(div)(bun, bden));
-        PV(store)(v, PV(div)(bvn, bden));
-        for (uint32_t e = lanes; e; e &= e - 1) {
-            unsigned l = (unsigned)__builtin_ctz(e);
-            const int miss = bprim[l] == SC_HITREC_MISS;
-            hit->prim[l] = bprim[l];
-            hit->t[l] = miss ? r->tmax[l] : tm[l];
-            hit->u[l] = miss ? 0 : u[l];
-            hit->v[l] = miss ? 0 : v[l];
-            hit->ng_x[l] = miss ? 0 : bng[0][l];
-            hit->ng_y[l] = miss ? 0 : bng[1][l];
-            hit->ng_z[l] = miss ? 0 : bng[2][l];
-            hit->geom[l] = miss ? SC_INVALID_ID : 0;
-            hit->inst[l] = SC_INVALID_ID;
-        }
+        /* the hit rows in vectors, stored to the traced lanes only (the
+         * caller's other lanes stay as they were). A lane without a hit
+         * still has its start values, the miss record: t = its tmax,
+         * u = 0 / 1, ng = 0, prim = SC_HITREC_MISS. */
+        const pvec invalid = PV(set1_bits)(SC_INVALID_ID);
+#define OUT(row, v) PV(store_lanes)((float *)(void *)hit->row, lanes, (v))
+        OUT(t, tmaxv);
+        OUT(u, PV(div)(bun, bden));
+        OUT(v, PV(div)(bvn, bden));
+        OUT(prim, bprimv);
+        OUT(ng_x, bng[0]);
+        OUT(ng_y, bng[1]);
+        OUT(ng_z, bng[2]);
+        OUT(geom, PV(sel)(PV(mask_from_bits)(got), PV(set1)(0), invalid));
+        OUT(inst, invalid);
+#undef OUT
     }
 }
 
