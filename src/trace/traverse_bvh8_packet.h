@@ -63,7 +63,6 @@ typedef struct {
     /* the frustum of a uniform packet, per axis: extreme reciprocals and
      * padded offsets over the traced lanes (pk_frustum_node) */
     float fr_rdmin[3], fr_rdmax[3], fr_onmax[3], fr_ofmin[3], fr_tmin;
-    int frustum;                  /* uniform and one origin: pk_frustum_node culls first */
     int cone;                     /* every traced lane has the same origin: the cone below */
     float apex[3], axis[3], cos_t, sin_t;
 } PFN(pk_ctx);
@@ -141,7 +140,6 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     const uint32_t tl = lanes & ~par;
     c->uniform = 1;
     c->cone = 0;
-    c->frustum = 0;
     if (!tl)
         return par;
     for (int k = 0; k < 3; k++) {
@@ -158,14 +156,6 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
         PV(store)(c->ordf[k], of);
         PV(store)(c->org[k], o[k]);
         c->neg[k] = PV(bits)(PV(lt)(d[k], PV(set1)(0))) & tl;
-        {
-            const PV(m) tm = PV(mask_from_bits)(tl);
-            const pvec pinf = PV(set1)(INFINITY);
-            c->fr_rdmin[k] = PV(hmin)(PV(sel)(tm, rd, pinf));
-            c->fr_rdmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), rd), pinf));
-            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(PV(set1)(0), on), pinf));
-            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, of, pinf));
-        }
         if (c->neg[k] != 0 && c->neg[k] != tl)
             c->uniform = 0;
     }
@@ -190,23 +180,36 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     PV(store)(c->Sz, PV(div)(one, dkz));
     PV(store)(c->tmin, tmin);
     PV(store)(c->tmax, tmax);
-    c->fr_tmin = PV(hmin)(PV(sel)(PV(mask_from_bits)(tl), tmin, PV(set1)(INFINITY)));
     for (uint32_t *mk = &c->kx1; mk <= &c->kz2; mk++)
         if (*mk != 0 && *mk != tl)
             c->uniform = 0;
+    if (c->uniform) {
+        /* the frustum (pk_frustum_node) */
+        const PV(m) tm = PV(mask_from_bits)(tl);
+        const pvec pinf = PV(set1)(INFINITY), zero = PV(set1)(0);
+        for (int k = 0; k < 3; k++) {
+            const pvec rd = PV(load)(c->rd[k]);
+            c->fr_rdmin[k] = PV(hmin)(PV(sel)(tm, rd, pinf));
+            c->fr_rdmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(zero, rd), pinf));
+            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(zero, PV(load)(c->ordn[k])), pinf));
+            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, PV(load)(c->ordf[k]), pinf));
+        }
+        c->fr_tmin = PV(hmin)(PV(sel)(tm, tmin, pinf));
+    }
     const uint32_t first = 1u << __builtin_ctz(tl);
     c->oct = (c->neg[0] & first ? 1 : 0) | (c->neg[1] & first ? 2 : 0) | (c->neg[2] & first ? 4 : 0);
     c->kx = c->kx1 & first ? 1 : c->kx2 & first ? 2 : 0;
     c->ky = c->ky1 & first ? 1 : c->ky2 & first ? 2 : 0;
     c->kz = c->kz1 & first ? 1 : c->kz2 & first ? 2 : 0;
-    /* one origin: every traced lane's bits equal the first's */
-    const unsigned ff = (unsigned)__builtin_ctz(tl);
-    uint32_t same = tl;
-    for (int k = 0; k < 3; k++)
-        same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
-    c->frustum = c->uniform && same == tl;
-    if (cone && same == tl && __builtin_popcount(tl) > 1)
-        c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
+    if (cone && __builtin_popcount(tl) > 1) {
+        /* one origin: every traced lane's bits equal the first's */
+        const unsigned ff = (unsigned)__builtin_ctz(tl);
+        uint32_t same = tl;
+        for (int k = 0; k < 3; k++)
+            same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
+        if (same == tl)
+            c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
+    }
     return par;
 }
 
@@ -270,7 +273,9 @@ typedef struct {
  * the frustum's near distance is never above any lane's, its far distance
  * never below (b_min, the other r). A child that any lane's own test
  * (node_bvh8_slab.h) passes therefore passes here; dist gets the near
- * bound, a lower bound of every lane's entry distance. */
+ * bound, a lower bound of every lane's entry distance. The lanes' offsets
+ * b_i differ with their origins, so this holds for any uniform packet; one
+ * origin (camera rays) only makes the bounds tight. */
 SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 *node, int nr0, int nr1,
                                             int nr2, int fr0, int fr1, int fr2, float tmax_hi, float *dist)
 {
@@ -391,11 +396,11 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
             if (STATS)
                 st->nodes++;
-            /* children to test lane by lane: with one origin, those the
-             * packet's frustum keeps (one 8-wide test culls the rest) */
+            /* children to test lane by lane: in a uniform packet, those
+             * the packet's frustum keeps (one 8-wide test culls the rest) */
             unsigned cand = 0xff;
-            if (UNI && c->frustum) {
-                float fdist[SC_BVH_N] __attribute__((aligned(32)));
+            float fdist[SC_BVH_N] __attribute__((aligned(32)));
+            if (UNI) {
                 cand = PFN(pk_frustum_node)(c, node, nr0, nr1, nr2, fr0, fr1, fr2, tmax_hi, fdist);
                 if (!cand)
                     goto pop;
@@ -432,7 +437,13 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     continue;
                 hr[cnt] = node->child[k];
                 hmk[cnt] = mk;
-                htn[cnt] = tn;
+                /* the order key: the frustum's near bound (below every
+                 * lane's own entry, pk_frustum_node) where there is one,
+                 * else the nearest entry of the child's lanes (below) */
+                if (UNI)
+                    hd[cnt] = fdist[k];
+                else
+                    htn[cnt] = tn;
                 cnt++;
             }
             if (cnt == 0)
@@ -443,9 +454,9 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 continue;
             }
             if (!ANY) {
-                /* the nearest entry of each hit child's active lanes */
-                for (int i = 0; i < cnt; i++)
-                    hd[i] = PV(hmin)(PV(sel)(PV(mask_from_bits)(hmk[i]), htn[i], inf));
+                if (!UNI)
+                    for (int i = 0; i < cnt; i++)
+                        hd[i] = PV(hmin)(PV(sel)(PV(mask_from_bits)(hmk[i]), htn[i], inf));
                 /* near first: insertion sort of the few hit children */
                 for (int i = 1; i < cnt; i++) {
                     uint64_t rr = hr[i];
@@ -616,7 +627,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                         bng[k] = PV(load)(ngl[k]);
                 }
             }
-            if (UNI && !ANY && c->frustum)
+            if (UNI && !ANY)
                 tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
         }
     pop:
