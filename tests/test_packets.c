@@ -511,6 +511,101 @@ static void test_streams(void **state)
     tmesh_free(&m);
 }
 
+/* Triangles whose sheared vertices coincide: a repeated vertex (every ray),
+ * or an edge parallel to the ray (seen end-on). One edge function is then
+ * exactly zero, and the optimised kernels skip the double-precision retest
+ * for such lanes because it cannot hit (det is exactly 0). The scalar
+ * kernel, the specification, still takes the double path: every ISA's
+ * single rays and packets must return its answers bit for bit, and no ray
+ * may hit a degenerate triangle. Directions are dyadic (d = (1/2, 1/4, 1)
+ * and its mirror images), so an edge along d is seen exactly end-on. */
+static void test_repeated_vertices(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double d[3] = { 0.5, 0.25, 1.0 };
+    size_t ndeg = 0;
+    uint32_t *deg = NULL;
+    const int G = 12;
+    for (int i = 0; i < G; i++)
+        for (int j = 0; j < G; j++) {
+            const double x = i * 0.25, y = j * 0.25, z = ((i * 7 + j * 3) % 5) * 0.125;
+            uint32_t a = tmesh_vertex(&m, x, y, z), b = tmesh_vertex(&m, x + 0.25, y, z);
+            uint32_t c = tmesh_vertex(&m, x, y + 0.25, z + 0.125);
+            /* the edge a-e lies along d: end-on to rays of direction d */
+            uint32_t e = tmesh_vertex(&m, x + d[0] * 0.125, y + d[1] * 0.125, z + d[2] * 0.125);
+            tmesh_tri(&m, a, b, c);             /* an ordinary triangle */
+            deg = realloc(deg, (ndeg + 5) * sizeof *deg);
+            const uint32_t rep[5][3] = { { a, a, b }, { a, b, b }, { b, a, b }, { c, c, c }, { a, e, b } };
+            for (int k = 0; k < 5; k++) {
+                if (k < 4)
+                    deg[ndeg++] = (uint32_t)m.nt;
+                tmesh_tri(&m, rep[k][0], rep[k][1], rep[k][2]);
+            }
+        }
+    /* rays of direction +-d through every vertex, and packets from one
+     * origin aimed at the vertices */
+    const size_t n = 16 * 40;
+    sc_ray *rays = calloc(n, sizeof *rays);
+    int32_t *valid = malloc(n * sizeof *valid);
+    for (size_t r = 0; r < n; r++) {
+        const float *v = &m.pos[3 * ((r * 7) % m.nv)];
+        double o[3], dd[3];
+        if (r < n / 2) {
+            const double sg = (r / 16) % 2 ? -1.0 : 1.0;
+            for (int k = 0; k < 3; k++)
+                dd[k] = sg * d[k], o[k] = v[k] - 8 * dd[k];
+        } else {
+            const double eye[3] = { -1.0, -0.5, -3.0 };
+            for (int k = 0; k < 3; k++)
+                o[k] = eye[k], dd[k] = v[k] - eye[k];
+        }
+        set_ray(&rays[r], o, dd, 0.0f, INFINITY);
+        valid[r] = -1;
+    }
+    const sc_isa start = sc_isa_active();
+    for (int leaf = 4; leaf <= 16; leaf *= 2) {
+        sc_hitrec ref[16 * 40];
+        int occ_ref[16 * 40];
+        assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
+        sc_bvh *b = build(&m, leaf, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT);
+        size_t hits = 0;
+        for (size_t r = 0; r < n; r++) {
+            assert_int_equal(sc_trace_closest(b, &rays[r], &ref[r], NULL), SC_OK);
+            assert_int_equal(sc_trace_any(b, &rays[r], &occ_ref[r], NULL), SC_OK);
+            for (size_t k = 0; k < ndeg; k++)
+                assert_int_not_equal(ref[r].prim, deg[k]);
+            hits += ref[r].prim != SC_HITREC_MISS;
+        }
+        sc_bvh_free(b);
+        assert_true(hits > n / 4);
+        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
+                continue;
+            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+            b = build(&m, leaf, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT);
+            packets pk = { rays, valid, n };
+            size_t bad = 0;
+            for (size_t r = 0; r < n; r++) {
+                sc_hitrec h;
+                int o;
+                assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
+                assert_int_equal(sc_trace_any(b, &rays[r], &o, NULL), SC_OK);
+                bad += !(h.prim == ref[r].prim && same_bits(h.t, ref[r].t) && same_bits(h.u, ref[r].u) &&
+                         same_bits(h.v, ref[r].v) && o == occ_ref[r]);
+            }
+            bad += check(b, &pk, NULL);   /* packets against this level's single rays */
+            if (bad)
+                print_message("leaf %d %s: %zu differ\n", leaf, sc_isa_name((sc_isa)isa), bad);
+            assert_int_equal(bad, 0);
+            sc_bvh_free(b);
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    free(rays), free(valid), free(deg);
+    tmesh_free(&m);
+}
+
 static void test_bunny(void **state)
 {
     (void)state;
@@ -536,6 +631,7 @@ int main(void)
         cmocka_unit_test(test_streams_incoherent),
         cmocka_unit_test(test_icosphere),
         cmocka_unit_test(test_soup_slivers),
+        cmocka_unit_test(test_repeated_vertices),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -590,6 +590,19 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     }
                 }
                 if (__builtin_expect(zr != 0, 0)) {
+                    /* Two equal sheared vertices (a triangle with a repeated
+                     * vertex, or an edge seen end-on) make one edge function
+                     * zero and the other two exact negatives, in float and
+                     * in sc_watertight_double alike, so det is exactly 0
+                     * there and the double test rejects: skip those lanes.
+                     * CAD meshes have such triangles, and every ray that
+                     * reaches one would take the double path. */
+                    const PV(m) dab = PV(and)(PV(eq)(Ax, Bx), PV(eq)(Ay, By));
+                    const PV(m) dbc = PV(and)(PV(eq)(Bx, Cx), PV(eq)(By, Cy));
+                    const PV(m) dac = PV(and)(PV(eq)(Ax, Cx), PV(eq)(Ay, Cy));
+                    zr &= ~PV(bits)(PV(or)(PV(or)(dab, dbc), dac));
+                }
+                if (__builtin_expect(zr != 0, 0)) {
                     /* an exactly zero edge function: sc_watertight_double
                      * per lane, as the single ray does */
                     float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];

@@ -62,6 +62,14 @@ tri_watertight8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, u
     __m256 zr = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
                              _mm256_cmp_ps(Wv, zero, _CMP_EQ_OQ));
     unsigned zmask = mask8(zr) & live;
+    if (__builtin_expect(zmask != 0, 0)) {
+        /* two equal sheared vertices: det is exactly 0 in float and in
+         * sc_watertight_double alike (traverse_bvh8_packet.h says why), so
+         * those lanes cannot hit; CAD meshes have such triangles */
+#define EQ2(P, Q) _mm256_and_ps(_mm256_cmp_ps(P##x, Q##x, _CMP_EQ_OQ), _mm256_cmp_ps(P##y, Q##y, _CMP_EQ_OQ))
+        zmask &= ~mask8(_mm256_or_ps(_mm256_or_ps(EQ2(A, B), EQ2(B, C)), EQ2(A, C)));
+#undef EQ2
+    }
     unsigned cand = mask8(ok) & live & ~zmask;
     unsigned hm = 0;
     __m256 Az = _mm256_mul_ps(Sz, Akz), Bz = _mm256_mul_ps(Sz, Bkz), Cz = _mm256_mul_ps(Sz, Ckz);
