@@ -177,7 +177,8 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
     const pvec dky = PFN(pk_sel3)(c->ky1, c->ky2, d[0], d[1], d[2]);
     PV(store)(c->Sx, PV(div)(dkx, dkz));
     PV(store)(c->Sy, PV(div)(dky, dkz));
-    PV(store)(c->Sz, PV(div)(one, dkz));
+    /* Sz = 1 / d[kz]: the traced lanes' rd on axis kz, the same division */
+    PV(store)(c->Sz, PFN(pk_sel3)(c->kz1, c->kz2, PV(load)(c->rd[0]), PV(load)(c->rd[1]), PV(load)(c->rd[2])));
     PV(store)(c->tmin, tmin);
     PV(store)(c->tmax, tmax);
     for (uint32_t *mk = &c->kx1; mk <= &c->kz2; mk++)
