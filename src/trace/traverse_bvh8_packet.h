@@ -506,6 +506,12 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             }
             const pvec o0 = PV(load)(c->org[0]), o1 = PV(load)(c->org[1]), o2 = PV(load)(c->org[2]);
             const pvec Sx = PV(load)(c->Sx), Sy = PV(load)(c->Sy), Sz = PV(load)(c->Sz);
+            /* a uniform packet's rows kx, ky, kz of vertex A; B and C
+             * follow at 3W and 6W (sc_leaf_at) */
+            const float *rx = rows + (size_t)(UNI ? c->kx : 0) * W, *ry = rows + (size_t)(UNI ? c->ky : 0) * W,
+                        *rz = rows + (size_t)(UNI ? c->kz : 0) * W;
+            const pvec okx = PV(load)(c->org[UNI ? c->kx : 0]), oky = PV(load)(c->org[UNI ? c->ky : 0]),
+                       okz = PV(load)(c->org[UNI ? c->kz : 0]);
             for (; live && m; live &= live - 1) {
                 const unsigned i = (unsigned)__builtin_ctz(live);
                 if (STATS)
@@ -513,17 +519,16 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
 #define VTX(j, k) PV(set1)(rows[sc_leaf_at(W, (j), (k), i)])
                 pvec Akz, Bkz, Ckz, Ax, Ay, Bx, By, Cx, Cy;
                 if (UNI) {
-                    const int kx = c->kx, ky = c->ky, kz = c->kz;
-                    const pvec okx = PV(load)(c->org[kx]), oky = PV(load)(c->org[ky]), okz = PV(load)(c->org[kz]);
-                    Akz = PV(sub)(VTX(0, kz), okz);
-                    Bkz = PV(sub)(VTX(1, kz), okz);
-                    Ckz = PV(sub)(VTX(2, kz), okz);
-                    Ax = PV(sub)(PV(sub)(VTX(0, kx), okx), PV(mul)(Sx, Akz));
-                    Ay = PV(sub)(PV(sub)(VTX(0, ky), oky), PV(mul)(Sy, Akz));
-                    Bx = PV(sub)(PV(sub)(VTX(1, kx), okx), PV(mul)(Sx, Bkz));
-                    By = PV(sub)(PV(sub)(VTX(1, ky), oky), PV(mul)(Sy, Bkz));
-                    Cx = PV(sub)(PV(sub)(VTX(2, kx), okx), PV(mul)(Sx, Ckz));
-                    Cy = PV(sub)(PV(sub)(VTX(2, ky), oky), PV(mul)(Sy, Ckz));
+                    const size_t ia = i, ib = i + 3 * (size_t)W, ic = i + 6 * (size_t)W;
+                    Akz = PV(sub)(PV(set1)(rz[ia]), okz);
+                    Bkz = PV(sub)(PV(set1)(rz[ib]), okz);
+                    Ckz = PV(sub)(PV(set1)(rz[ic]), okz);
+                    Ax = PV(sub)(PV(sub)(PV(set1)(rx[ia]), okx), PV(mul)(Sx, Akz));
+                    Ay = PV(sub)(PV(sub)(PV(set1)(ry[ia]), oky), PV(mul)(Sy, Akz));
+                    Bx = PV(sub)(PV(sub)(PV(set1)(rx[ib]), okx), PV(mul)(Sx, Bkz));
+                    By = PV(sub)(PV(sub)(PV(set1)(ry[ib]), oky), PV(mul)(Sy, Bkz));
+                    Cx = PV(sub)(PV(sub)(PV(set1)(rx[ic]), okx), PV(mul)(Sx, Ckz));
+                    Cy = PV(sub)(PV(sub)(PV(set1)(ry[ic]), oky), PV(mul)(Sy, Ckz));
                 } else {
                     /* A[k] = v - o for every axis, then the lane's axes */
                     pvec A0 = PV(sub)(VTX(0, 0), o0), A1 = PV(sub)(VTX(0, 1), o1), A2 = PV(sub)(VTX(0, 2), o2);
@@ -544,11 +549,15 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 const pvec V = PV(sub)(PV(mul)(Ax, Cy), PV(mul)(Ay, Cx));
                 const pvec Wv = PV(sub)(PV(mul)(Bx, Ay), PV(mul)(By, Ax));
                 const pvec zero = PV(set1)(0);
-                uint32_t neg = PV(bits)(PV(or)(PV(or)(PV(lt)(U, zero), PV(lt)(V, zero)), PV(lt)(Wv, zero)));
-                uint32_t pos = PV(bits)(PV(or)(PV(or)(PV(gt)(U, zero), PV(gt)(V, zero)), PV(gt)(Wv, zero)));
+                /* edge functions of both signs: a miss. As the smallest
+                 * below zero and the largest above, which differs from
+                 * the three-way sign test only in lanes with a NaN edge
+                 * function, whose det and t are NaN, so never a hit. */
+                const pvec emin = PV(min)(PV(min)(U, V), Wv), emax = PV(max)(PV(max)(U, V), Wv);
+                const uint32_t both = PV(bits)(PV(and)(PV(lt)(emin, zero), PV(gt)(emax, zero)));
                 uint32_t zr = PV(bits)(PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero))) & m;
                 const pvec det = PV(add)(PV(add)(U, V), Wv);
-                uint32_t cand = ~(neg & pos) & ~PV(bits)(PV(eq)(det, zero)) & m & ~zr;
+                uint32_t cand = ~both & ~PV(bits)(PV(eq)(det, zero)) & m & ~zr;
                 const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
                 uint32_t h = 0;
                 pvec tt = zero;
