@@ -82,30 +82,6 @@ static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 
  * int32_t occlusion array (any). The level's kernel of that width; a
  * 16-ray packet on a level with 8-lane kernels as two halves; lane by lane
  * through the single-ray kernels where the level or test has none. */
-
-/* Lane i of an 8- or 16-lane hit packet (sc_hit.h: nine rows of W, in the
- * order t, u, v, prim, ng_x, ng_y, ng_z, geom, inst) to and from a hit
- * record. */
-void sc_hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h)
-{
-    float *f = packet;
-    uint32_t *u = packet;
-    f[i] = h->t, f[W + i] = h->u, f[2 * W + i] = h->v;
-    u[3 * W + i] = h->prim;
-    f[4 * W + i] = h->ng[0], f[5 * W + i] = h->ng[1], f[6 * W + i] = h->ng[2];
-    u[7 * W + i] = h->geom, u[8 * W + i] = h->inst;
-}
-
-void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h)
-{
-    const float *f = packet;
-    const uint32_t *u = packet;
-    h->t = f[i], h->u = f[W + i], h->v = f[2 * W + i];
-    h->prim = u[3 * W + i];
-    h->ng[0] = f[4 * W + i], h->ng[1] = f[5 * W + i], h->ng[2] = f[6 * W + i];
-    h->geom = u[7 * W + i], h->inst = u[8 * W + i];
-}
-
 void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
                            sc_trace_stats *stats)
 {
@@ -232,12 +208,20 @@ static int packet_coherent(const sc_ray_packet16 *p, const float *lo, const floa
             volo[a] = i ? _mm_min_ps(volo[a], o) : o, vohi[a] = i ? _mm_max_ps(vohi[a], o) : o;
         }
     }
+    /* the lanes' extremes by shuffles (fminf and fmaxf are calls at the
+     * baseline level) */
+#define HMIN(v) (_mm_cvtss_f32(_mm_min_ss(_mm_min_ps(v, _mm_movehl_ps(v, v)),                     \
+                                           _mm_shuffle_ps(_mm_min_ps(v, _mm_movehl_ps(v, v)),    \
+                                                          _mm_min_ps(v, _mm_movehl_ps(v, v)), 1))))
+#define HMAX(v) (_mm_cvtss_f32(_mm_max_ss(_mm_max_ps(v, _mm_movehl_ps(v, v)),                     \
+                                           _mm_shuffle_ps(_mm_max_ps(v, _mm_movehl_ps(v, v)),    \
+                                                          _mm_max_ps(v, _mm_movehl_ps(v, v)), 1))))
     for (int a = 0; a < 3; a++) {
-        float l[4], h[4], ol[4], oh[4];
-        _mm_storeu_ps(l, vdlo[a]), _mm_storeu_ps(h, vdhi[a]), _mm_storeu_ps(ol, volo[a]), _mm_storeu_ps(oh, vohi[a]);
-        dlo[a] = fminf(fminf(l[0], l[1]), fminf(l[2], l[3])), dhi[a] = fmaxf(fmaxf(h[0], h[1]), fmaxf(h[2], h[3]));
-        olo[a] = fminf(fminf(ol[0], ol[1]), fminf(ol[2], ol[3])), ohi[a] = fmaxf(fmaxf(oh[0], oh[1]), fmaxf(oh[2], oh[3]));
+        dlo[a] = HMIN(vdlo[a]), dhi[a] = HMAX(vdhi[a]);
+        olo[a] = HMIN(volo[a]), ohi[a] = HMAX(vohi[a]);
     }
+#undef HMIN
+#undef HMAX
 #else
     for (int a = 0; a < 3; a++)
         dlo[a] = olo[a] = INFINITY, dhi[a] = ohi[a] = -INFINITY;

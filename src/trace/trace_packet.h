@@ -29,9 +29,27 @@ void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows,
                            sc_trace_stats *stats);
 
 /* Lane i of a W-lane hit packet (rows t, u, v, prim, ng_x, ng_y, ng_z,
- * geom, inst) to and from a hit record. */
-void sc_hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h);
-void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h);
+ * geom, inst) to and from a hit record; inline, since streams call them
+ * for every ray. */
+static inline void sc_hit_lane_put(void *packet, unsigned W, unsigned i, const sc_hitrec *h)
+{
+    float *f = packet;
+    uint32_t *u = packet;
+    f[i] = h->t, f[W + i] = h->u, f[2 * W + i] = h->v;
+    u[3 * W + i] = h->prim;
+    f[4 * W + i] = h->ng[0], f[5 * W + i] = h->ng[1], f[6 * W + i] = h->ng[2];
+    u[7 * W + i] = h->geom, u[8 * W + i] = h->inst;
+}
+
+static inline void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, sc_hitrec *h)
+{
+    const float *f = packet;
+    const uint32_t *u = packet;
+    h->t = f[i], h->u = f[W + i], h->v = f[2 * W + i];
+    h->prim = u[3 * W + i];
+    h->ng[0] = f[4 * W + i], h->ng[1] = f[5 * W + i], h->ng[2] = f[6 * W + i];
+    h->geom = u[7 * W + i], h->inst = u[8 * W + i];
+}
 
 /* What a stream traces: a 16-ray packet (valid lanes checked by the
  * callee: returns non-OK, writing nothing, if one is refused) and single
