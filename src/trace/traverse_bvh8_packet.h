@@ -300,25 +300,66 @@ SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ));
 }
 
+/* A packet's best hit so far per lane (closest): t (the lanes' tmax), the
+ * unnormalised barycentrics un / den and vn / den, the primitive id (its
+ * bit pattern in a float lane) and the geometric normal (sc_leaf_normal);
+ * got: the lanes that have one. A lane without a hit keeps its start
+ * values, which are the miss record (t = its tmax, u = v = 0, ng = 0,
+ * prim = SC_HITREC_MISS). */
+typedef struct {
+    pvec t, un, vn, den, prim, ng[3];
+    uint32_t got;
+} PFN(pk_best);
+
+/* The same, lane by lane: for the rare paths that update single lanes
+ * (pk_best_spill, pk_best_offer, then pk_best_fill). */
+typedef struct {
+    float t[PK], un[PK], vn[PK], den[PK], ng[3][PK];
+    uint32_t prim[PK];
+} PFN(pk_best_lanes);
+
+SC_X86_INLINE void PFN(pk_best_spill)(const PFN(pk_best) *b, PFN(pk_best_lanes) *a)
+{
+    PV(store)(a->t, b->t), PV(store)(a->un, b->un), PV(store)(a->vn, b->vn), PV(store)(a->den, b->den);
+    PV(store)((float *)(void *)a->prim, b->prim);
+    for (int k = 0; k < 3; k++)
+        PV(store)(a->ng[k], b->ng[k]);
+}
+
+SC_X86_INLINE void PFN(pk_best_fill)(PFN(pk_best) *b, const PFN(pk_best_lanes) *a)
+{
+    b->t = PV(load)(a->t), b->un = PV(load)(a->un), b->vn = PV(load)(a->vn), b->den = PV(load)(a->den);
+    b->prim = PV(load)((const float *)(const void *)a->prim);
+    for (int k = 0; k < 3; k++)
+        b->ng[k] = PV(load)(a->ng[k]);
+}
+
+/* A hit (t, u, v already divided out, prim, normal) for lane l: kept if it
+ * is nearer, or as near with a smaller primitive id (the tie rule). */
+SC_X86_INLINE void PFN(pk_best_offer)(PFN(pk_best) *b, PFN(pk_best_lanes) *a, unsigned l, float t, float u,
+                                      float v, uint32_t prim, const float ng[3])
+{
+    if (!(t < a->t[l] || prim < a->prim[l]))
+        return;
+    a->t[l] = t, a->un[l] = u, a->vn[l] = v, a->den[l] = 1, a->prim[l] = prim;
+    a->ng[0][l] = ng[0], a->ng[1][l] = ng[1], a->ng[2][l] = ng[2];
+    b->got |= 1u << l;
+}
+
 /* Lanes m finish the subtree ref as single rays (traverse_bvh8_single.h,
  * the same kernel as sc_trace_closest / sc_trace_any) with tmax = the
- * lane's best t so far; a hit replaces the lane's best by the (t, prim)
- * order. The single kernel returns u and v divided out: den = 1. */
-SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref, uint32_t m, pvec *tmaxv,
-                                  pvec *bun, pvec *bvn, pvec *bden, pvec *bprimv, pvec *bng, uint32_t *got,
+ * lane's best t so far. */
+SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref, uint32_t m, PFN(pk_best) *best,
                                   uint32_t *alive, sc_trace_stats *st, const int ANY, const int STATS)
 {
-    float tm[PK], un[PK], vn[PK], dn[PK], ng[3][PK];
-    uint32_t bprim[PK];
-    PV(store)(tm, *tmaxv);
-    if (!ANY) {
-        PV(store)(un, *bun), PV(store)(vn, *bvn), PV(store)(dn, *bden);
-        PV(store)((float *)(void *)bprim, *bprimv);
-        PV(store)(ng[0], bng[0]), PV(store)(ng[1], bng[1]), PV(store)(ng[2], bng[2]);
-    }
+    PFN(pk_best_lanes) a;
+    if (ANY)
+        PV(store)(a.t, best->t);
+    else
+        PFN(pk_best_spill)(best, &a);
     for (; m; m &= m - 1) {
         const unsigned l = (unsigned)__builtin_ctz(m);
-        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, tm[l] };
+        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, a.t[l] };
         sc_hitrec h;
         int hit;
         if (STATS) {
@@ -333,19 +374,12 @@ SC_X86_INLINE void PFN(pk_single)(const sc_bvh *bvh, const PKT *r, uint64_t ref,
         if (ANY) {
             if (hit)
                 *alive &= ~(1u << l);
-        } else if (h.prim != SC_HITREC_MISS && (h.t < tm[l] || h.prim < bprim[l])) {
-            tm[l] = h.t, un[l] = h.u, vn[l] = h.v, dn[l] = 1;
-            bprim[l] = h.prim;
-            ng[0][l] = h.ng[0], ng[1][l] = h.ng[1], ng[2][l] = h.ng[2];
-            *got |= 1u << l;
+        } else if (h.prim != SC_HITREC_MISS) {
+            PFN(pk_best_offer)(best, &a, l, h.t, h.u, h.v, h.prim, h.ng);
         }
     }
-    if (!ANY) {
-        *tmaxv = PV(load)(tm);
-        *bun = PV(load)(un), *bvn = PV(load)(vn), *bden = PV(load)(dn);
-        *bprimv = PV(load)((const float *)(const void *)bprim);
-        bng[0] = PV(load)(ng[0]), bng[1] = PV(load)(ng[1]), bng[2] = PV(load)(ng[2]);
-    }
+    if (!ANY)
+        PFN(pk_best_fill)(best, &a);
 }
 
 /* The traversal. UNI = 1: every lane has the packet's octant and shear axes
@@ -359,16 +393,11 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
     const pvec of0 = PV(load)(c->ordf[0]), of1 = PV(load)(c->ordf[1]), of2 = PV(load)(c->ordf[2]);
     const pvec tminv = PV(load)(c->tmin);
     const pvec inf = PV(set1)(INFINITY);
-    pvec tmaxv = PV(load)(c->tmax);
+    const pvec zero = PV(set1)(0);
+    PFN(pk_best) best = { PV(load)(c->tmax), zero, zero, PV(set1)(1), PV(set1_bits)(SC_HITREC_MISS),
+                          { zero, zero, zero }, 0 };
     /* the largest tmax of the traced lanes: the frustum's far bound */
-    float tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
-    /* the best hit so far per lane (closest): its t is tmaxv */
-    pvec bun = PV(set1)(0), bvn = PV(set1)(0), bden = PV(set1)(1);
-    /* its primitive id (bit patterns in float lanes) and geometric normal
-     * (sc_leaf_normal); got: the lanes that have one */
-    pvec bprimv = PV(set1_bits)(SC_HITREC_MISS);
-    pvec bng[3] = { PV(set1)(0), PV(set1)(0), PV(set1)(0) };
-    uint32_t got = 0;
+    float tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(zero, best.t), inf));
     uint32_t alive = lanes;       /* any: lanes not yet occluded */
     PFN(pk_entry) stack[SC_TRACE_STACK];
     int sp = 0;
@@ -390,8 +419,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             if (__builtin_popcount(m) <= SC_PACKET_THIN) {
                 /* a thin packet: its lanes finish this subtree as single
                  * rays, each bounded by its own best hit so far */
-                PFN(pk_single)(bvh, r, ref, m, &tmaxv, &bun, &bvn, &bden, &bprimv, bng, &got, &alive, st,
-                               ANY, STATS);
+                PFN(pk_single)(bvh, r, ref, m, &best, &alive, st, ANY, STATS);
                 goto pop;
             }
             const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
@@ -432,7 +460,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 pvec tn = PV(max)(PV(max)(PV(fmsub)(nx, rd0, on0), PV(fmsub)(ny, rd1, on1)),
                                   PV(max)(PV(fmsub)(nz, rd2, on2), tminv));
                 pvec tf = PV(min)(PV(min)(PV(fmsub)(fx, rd0, of0), PV(fmsub)(fy, rd1, of1)),
-                                  PV(min)(PV(fmsub)(fz, rd2, of2), tmaxv));
+                                  PV(min)(PV(fmsub)(fz, rd2, of2), best.t));
                 uint32_t mk = PV(bits)(PV(le)(tn, tf)) & m;
                 if (!mk)
                     continue;
@@ -548,7 +576,6 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 const pvec U = PV(sub)(PV(mul)(Cx, By), PV(mul)(Cy, Bx));
                 const pvec V = PV(sub)(PV(mul)(Ax, Cy), PV(mul)(Ay, Cx));
                 const pvec Wv = PV(sub)(PV(mul)(Bx, Ay), PV(mul)(By, Ax));
-                const pvec zero = PV(set1)(0);
                 /* edge functions of both signs: a miss. As the smallest
                  * below zero and the largest above, which differs from
                  * the three-way sign test only in lanes with a NaN edge
@@ -564,7 +591,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 if (cand) {
                     pvec T = PV(add)(PV(add)(PV(mul)(U, Az), PV(mul)(V, Bz)), PV(mul)(Wv, Cz));
                     tt = PV(div)(T, det);
-                    h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, tmaxv))) & cand;
+                    h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, best.t))) & cand;
                 }
                 if (h) {
                     if (STATS)
@@ -574,10 +601,10 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                         m &= ~h;
                     } else {
                         /* of equal t the smaller primitive id */
-                        uint32_t upd = h & PV(bits)(PV(lt)(tt, tmaxv));
+                        uint32_t upd = h & PV(bits)(PV(lt)(tt, best.t));
                         if (h & ~upd) {
                             uint32_t bprim[PK];
-                            PV(store)((float *)(void *)bprim, bprimv);
+                            PV(store)((float *)(void *)bprim, best.prim);
                             for (uint32_t e = h & ~upd; e; e &= e - 1) {
                                 unsigned l = (unsigned)__builtin_ctz(e);
                                 if (prims[i] < bprim[l])
@@ -588,14 +615,14 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                             const PV(m) um = PV(mask_from_bits)(upd);
                             float ng[3];
                             sc_leaf_normal(rows, W, i, ng);
-                            tmaxv = PV(sel)(um, tt, tmaxv);
-                            bun = PV(sel)(um, V, bun);
-                            bvn = PV(sel)(um, Wv, bvn);
-                            bden = PV(sel)(um, det, bden);
-                            bprimv = PV(sel)(um, PV(set1_bits)(prims[i]), bprimv);
+                            best.t = PV(sel)(um, tt, best.t);
+                            best.un = PV(sel)(um, V, best.un);
+                            best.vn = PV(sel)(um, Wv, best.vn);
+                            best.den = PV(sel)(um, det, best.den);
+                            best.prim = PV(sel)(um, PV(set1_bits)(prims[i]), best.prim);
                             for (int k = 0; k < 3; k++)
-                                bng[k] = PV(sel)(um, PV(set1)(ng[k]), bng[k]);
-                            got |= upd;
+                                best.ng[k] = PV(sel)(um, PV(set1)(ng[k]), best.ng[k]);
+                            best.got |= upd;
                         }
                     }
                 }
@@ -616,42 +643,34 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     /* an exactly zero edge function: sc_watertight_double
                      * per lane, as the single ray does */
                     float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
-                    float tm[PK], un[PK], vn[PK], dn[PK], ngl[3][PK];
-                    uint32_t bprim[PK];
+                    PFN(pk_best_lanes) a;
                     PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
                     PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, Az), PV(store)(bz, Bz);
-                    PV(store)(cz, Cz), PV(store)(tm, tmaxv), PV(store)(un, bun), PV(store)(vn, bvn);
-                    PV(store)(dn, bden), PV(store)((float *)(void *)bprim, bprimv);
-                    for (int k = 0; k < 3; k++)
-                        PV(store)(ngl[k], bng[k]);
+                    PV(store)(cz, Cz);
+                    PFN(pk_best_spill)(&best, &a);
                     for (uint32_t e = zr; e; e &= e - 1) {
                         unsigned l = (unsigned)__builtin_ctz(e);
                         float t, u, v;
                         if (!sc_watertight_double(ax[l], ay[l], bx[l], by[l], cx[l], cy[l], az[l], bz[l],
-                                                  cz[l], c->tmin[l], tm[l], &t, &u, &v))
+                                                  cz[l], c->tmin[l], a.t[l], &t, &u, &v))
                             continue;
                         if (STATS)
                             st->tri_hits++;
                         if (ANY) {
                             alive &= ~(1u << l);
                             m &= ~(1u << l);
-                        } else if (t < tm[l] || prims[i] < bprim[l]) {
-                            tm[l] = t, un[l] = u, vn[l] = v, dn[l] = 1;
-                            bprim[l] = prims[i];
+                        } else {
                             float ng[3];
                             sc_leaf_normal(rows, W, i, ng);
-                            ngl[0][l] = ng[0], ngl[1][l] = ng[1], ngl[2][l] = ng[2];
-                            got |= 1u << l;
+                            PFN(pk_best_offer)(&best, &a, l, t, u, v, prims[i], ng);
                         }
                     }
-                    tmaxv = PV(load)(tm), bun = PV(load)(un), bvn = PV(load)(vn), bden = PV(load)(dn);
-                    bprimv = PV(load)((const float *)(const void *)bprim);
-                    for (int k = 0; k < 3; k++)
-                        bng[k] = PV(load)(ngl[k]);
+                    if (!ANY)
+                        PFN(pk_best_fill)(&best, &a);
                 }
             }
             if (UNI && !ANY)
-                tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(PV(set1)(0), tmaxv), inf));
+                tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(zero, best.t), inf));
         }
     pop:
         do {
@@ -660,7 +679,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             sp--;
             m = stack[sp].mask & alive;
             if (!ANY && m)
-                m &= PV(bits)(PV(ge)(tmaxv, PV(set1)(stack[sp].dist)));
+                m &= PV(bits)(PV(ge)(best.t, PV(set1)(stack[sp].dist)));
         } while (!m);
         ref = stack[sp].ref;
     }
@@ -673,20 +692,19 @@ done:
         return;
     }
     {
-        /* the hit rows in vectors, stored to the traced lanes only (the
-         * caller's other lanes stay as they were). A lane without a hit
-         * still has its start values, the miss record: t = its tmax,
-         * u = 0 / 1, ng = 0, prim = SC_HITREC_MISS. */
+        /* the hit rows, stored to the traced lanes only (the caller's
+         * other lanes stay as they were); a lane without a hit writes the
+         * miss record it started with (pk_best) */
         const pvec invalid = PV(set1_bits)(SC_INVALID_ID);
 #define OUT(row, v) PV(store_lanes)((float *)(void *)hit->row, lanes, (v))
-        OUT(t, tmaxv);
-        OUT(u, PV(div)(bun, bden));
-        OUT(v, PV(div)(bvn, bden));
-        OUT(prim, bprimv);
-        OUT(ng_x, bng[0]);
-        OUT(ng_y, bng[1]);
-        OUT(ng_z, bng[2]);
-        OUT(geom, PV(sel)(PV(mask_from_bits)(got), PV(set1)(0), invalid));
+        OUT(t, best.t);
+        OUT(u, PV(div)(best.un, best.den));
+        OUT(v, PV(div)(best.vn, best.den));
+        OUT(prim, best.prim);
+        OUT(ng_x, best.ng[0]);
+        OUT(ng_y, best.ng[1]);
+        OUT(ng_z, best.ng[2]);
+        OUT(geom, PV(sel)(PV(mask_from_bits)(best.got), zero, invalid));
         OUT(inst, invalid);
 #undef OUT
     }
