@@ -191,6 +191,22 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 #define SC_STREAM_SPREAD 0.2f
 #define SC_STREAM_ORIGINS (1.0f / 16)
 
+#if defined(__SSE2__)
+/* The smallest (largest) of four lanes by shuffles: fminf and fmaxf are
+ * calls at the baseline ISA level this file is built for. */
+static inline float lanes_min4(__m128 v)
+{
+    v = _mm_min_ps(v, _mm_movehl_ps(v, v));
+    return _mm_cvtss_f32(_mm_min_ss(v, _mm_shuffle_ps(v, v, 1)));
+}
+
+static inline float lanes_max4(__m128 v)
+{
+    v = _mm_max_ps(v, _mm_movehl_ps(v, v));
+    return _mm_cvtss_f32(_mm_max_ss(v, _mm_shuffle_ps(v, v, 1)));
+}
+#endif
+
 static int packet_coherent(const sc_ray_packet16 *p, const float *lo, const float *hi)
 {
     float dlo[3], dhi[3], olo[3], ohi[3];
@@ -208,20 +224,10 @@ static int packet_coherent(const sc_ray_packet16 *p, const float *lo, const floa
             volo[a] = i ? _mm_min_ps(volo[a], o) : o, vohi[a] = i ? _mm_max_ps(vohi[a], o) : o;
         }
     }
-    /* the lanes' extremes by shuffles (fminf and fmaxf are calls at the
-     * baseline level) */
-#define HMIN(v) (_mm_cvtss_f32(_mm_min_ss(_mm_min_ps(v, _mm_movehl_ps(v, v)),                     \
-                                           _mm_shuffle_ps(_mm_min_ps(v, _mm_movehl_ps(v, v)),    \
-                                                          _mm_min_ps(v, _mm_movehl_ps(v, v)), 1))))
-#define HMAX(v) (_mm_cvtss_f32(_mm_max_ss(_mm_max_ps(v, _mm_movehl_ps(v, v)),                     \
-                                           _mm_shuffle_ps(_mm_max_ps(v, _mm_movehl_ps(v, v)),    \
-                                                          _mm_max_ps(v, _mm_movehl_ps(v, v)), 1))))
     for (int a = 0; a < 3; a++) {
-        dlo[a] = HMIN(vdlo[a]), dhi[a] = HMAX(vdhi[a]);
-        olo[a] = HMIN(volo[a]), ohi[a] = HMAX(vohi[a]);
+        dlo[a] = lanes_min4(vdlo[a]), dhi[a] = lanes_max4(vdhi[a]);
+        olo[a] = lanes_min4(volo[a]), ohi[a] = lanes_max4(vohi[a]);
     }
-#undef HMIN
-#undef HMAX
 #else
     for (int a = 0; a < 3; a++)
         dlo[a] = olo[a] = INFINITY, dhi[a] = ohi[a] = -INFINITY;
