@@ -553,16 +553,13 @@ sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_t
 
 /* ---- packets and streams ------------------------------------------------ */
 
-/* One body for the four packet calls (rows and out as sc_trace_packet_lanes). */
-static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const float *rows, unsigned W, void *out,
-                              int any, sc_trace_stats *st)
+/* Lanes `lanes` (checked rays) of a committed scene's W-lane packet (rows
+ * and out as sc_trace_packet_lanes). */
+static void accel_packet_lanes(const sc_accel *a, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                               sc_trace_stats *st)
 {
-    const int64_t lanes64 = a && a->committed ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
-    if (lanes64 < 0)
-        return SC_ERR_INVALID_ARGUMENT;
-    const uint32_t lanes = (uint32_t)lanes64;
     if (!lanes)
-        return SC_OK;   /* nothing to trace, nothing read or written */
+        return;   /* nothing to trace, nothing read or written */
     if (!a->ninst && a->bvh) {
         /* one tree: the packet kernels, ids mapped to (geom, prim) */
         sc_trace_packet_lanes(a->bvh, lanes, rows, W, out, any, st);
@@ -574,7 +571,7 @@ static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const flo
                 sc_top_map_ids(a->bvh, &h);
                 sc_hit_lane_put(out, W, i, &h);
             }
-        return SC_OK;
+        return;
     }
     if (a->ninst && a->top_nodes) {
         sc_kernels_active()->trace[0].top_packet(&a->top, lanes, rows, W, out, any, st);
@@ -593,6 +590,16 @@ static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const flo
     }
     if (st)
         st->rays += (uint64_t)__builtin_popcount(lanes);
+}
+
+/* One body for the four packet calls. */
+static sc_status accel_packet(const sc_accel *a, const int32_t *valid, const float *rows, unsigned W, void *out,
+                              int any, sc_trace_stats *st)
+{
+    const int64_t lanes = a && a->committed ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
+    if (lanes < 0)
+        return SC_ERR_INVALID_ARGUMENT;
+    accel_packet_lanes(a, (uint32_t)lanes, rows, W, out, any, st);
     return SC_OK;
 }
 
@@ -621,10 +628,10 @@ sc_status sc_accel_any16(const sc_accel *a, const int32_t valid[16], const sc_ra
 }
 
 /* A scene as a stream's target (sc_stream_run). */
-static sc_status accel_packet16(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out,
-                                int any, sc_trace_stats *st)
+static void accel_packet16(const void *obj, uint32_t lanes, const sc_ray_packet16 *rays, void *out, int any,
+                           sc_trace_stats *st)
 {
-    return accel_packet(obj, valid, (const float *)(const void *)rays, 16, out, any, st);
+    accel_packet_lanes(obj, lanes, rays->ox, 16, out, any, st);
 }
 
 static sc_status accel_single(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,

@@ -2,6 +2,7 @@
  * active ISA level (src/isa) for the BVH's triangle test. A NULL stats
  * pointer selects the kernel compiled without counters. */
 #include <float.h>
+#include <stddef.h>
 #include <string.h>
 #if defined(__SSE2__)
 #include <immintrin.h>
@@ -10,6 +11,7 @@
 #include "bvh/bvh_internal.h"
 #include "isa/isa_dispatch.h"
 #include "ray_setup.h"
+#include "stream_gather.h"
 #include "trace_packet.h"
 
 sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *stats)
@@ -180,76 +182,45 @@ sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], const sc_ra
 }
 
 /* ---- streams ---------------------------------------------------------------
- * A run of 16 consecutive rays goes as one packet when it looks coherent,
- * else ray by ray. Coherent: directions within a narrow box once scaled to
- * unit L1 length (camera tiles, shadow rays of a tile to one light), or
- * origins within 1/16 of the scene's extent (the bounces of one pixel tile:
- * the packet kernel hands lanes that part ways to the single-ray kernel).
- * Random rays (origins and directions all over) pass neither and go one by
- * one, which measured 1.4x faster for them than packets (docs/compare.md,
- * "Packets and streams"). */
-#define SC_STREAM_SPREAD 0.2f
-#define SC_STREAM_ORIGINS (1.0f / 16)
+ * A run of 16 consecutive rays goes as one packet when it looks coherent
+ * (stream_gather.h), else ray by ray. */
 
+/* Lanes [0, cnt) of a 16-lane hit packet to the hit records at out, each
+ * field stored straight into its record: a record filled field by field in
+ * a local and then copied whole stalled every ray on store forwarding (four
+ * small stores read back by one wide load). With SSE2, four lanes at a time:
+ * 4x4 transposes of the rows t u v prim and ng_x ng_y ng_z geom are the
+ * records' first 32 bytes (sc_hitrec's layout), then inst. */
+static void hit_rows_to_records(const sc_hit_packet16 *h, unsigned cnt, char *out, size_t out_stride)
+{
+    _Static_assert(offsetof(sc_hitrec, ng) == 16 && offsetof(sc_hitrec, inst) == 32, "sc_hitrec's layout");
+    const float *f = h->t;
+    unsigned i = 0;
 #if defined(__SSE2__)
-/* The smallest (largest) of four lanes by shuffles: fminf and fmaxf are
- * calls at the baseline ISA level this file is built for. */
-static inline float lanes_min4(__m128 v)
-{
-    v = _mm_min_ps(v, _mm_movehl_ps(v, v));
-    return _mm_cvtss_f32(_mm_min_ss(v, _mm_shuffle_ps(v, v, 1)));
-}
-
-static inline float lanes_max4(__m128 v)
-{
-    v = _mm_max_ps(v, _mm_movehl_ps(v, v));
-    return _mm_cvtss_f32(_mm_max_ss(v, _mm_shuffle_ps(v, v, 1)));
-}
-#endif
-
-static int packet_coherent(const sc_ray_packet16 *p, const float *lo, const float *hi)
-{
-    float dlo[3], dhi[3], olo[3], ohi[3];
-    const float *org[3] = { p->ox, p->oy, p->oz }, *dir[3] = { p->dx, p->dy, p->dz };
-#if defined(__SSE2__)
-    const __m128 sgn = _mm_set1_ps(-0.0f), one = _mm_set1_ps(1.0f);
-    __m128 vdlo[3], vdhi[3], volo[3], vohi[3];
-    for (unsigned i = 0; i < 16; i += 4) {
-        const __m128 d[3] = { _mm_load_ps(p->dx + i), _mm_load_ps(p->dy + i), _mm_load_ps(p->dz + i) };
-        const __m128 inv = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sgn, d[0]), _mm_andnot_ps(sgn, d[1])),
-                                                     _mm_andnot_ps(sgn, d[2])));
-        for (int a = 0; a < 3; a++) {
-            const __m128 u = _mm_mul_ps(d[a], inv), o = _mm_load_ps(org[a] + i);
-            vdlo[a] = i ? _mm_min_ps(vdlo[a], u) : u, vdhi[a] = i ? _mm_max_ps(vdhi[a], u) : u;
-            volo[a] = i ? _mm_min_ps(volo[a], o) : o, vohi[a] = i ? _mm_max_ps(vohi[a], o) : o;
+    for (; i + 4 <= cnt; i += 4)
+        for (unsigned half = 0; half < 8; half += 4) {
+            __m128 r0 = _mm_load_ps(f + (half + 0) * 16 + i), r1 = _mm_load_ps(f + (half + 1) * 16 + i);
+            __m128 r2 = _mm_load_ps(f + (half + 2) * 16 + i), r3 = _mm_load_ps(f + (half + 3) * 16 + i);
+            _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+            _mm_storeu_ps((float *)(void *)(out + (i + 0) * out_stride) + half, r0);
+            _mm_storeu_ps((float *)(void *)(out + (i + 1) * out_stride) + half, r1);
+            _mm_storeu_ps((float *)(void *)(out + (i + 2) * out_stride) + half, r2);
+            _mm_storeu_ps((float *)(void *)(out + (i + 3) * out_stride) + half, r3);
         }
-    }
-    for (int a = 0; a < 3; a++) {
-        dlo[a] = lanes_min4(vdlo[a]), dhi[a] = lanes_max4(vdhi[a]);
-        olo[a] = lanes_min4(volo[a]), ohi[a] = lanes_max4(vohi[a]);
-    }
-#else
-    for (int a = 0; a < 3; a++)
-        dlo[a] = olo[a] = INFINITY, dhi[a] = ohi[a] = -INFINITY;
-    for (unsigned i = 0; i < 16; i++) {
-        float inv = 1 / (fabsf(p->dx[i]) + fabsf(p->dy[i]) + fabsf(p->dz[i]));
-        for (int a = 0; a < 3; a++) {
-            float u = dir[a][i] * inv, o = org[a][i];
-            dlo[a] = fminf(dlo[a], u), dhi[a] = fmaxf(dhi[a], u);
-            olo[a] = fminf(olo[a], o), ohi[a] = fmaxf(ohi[a], o);
-        }
-    }
+    for (unsigned j = 0; j < i; j++)
+        memcpy(out + j * out_stride + offsetof(sc_hitrec, inst), &h->inst[j], sizeof h->inst[j]);
 #endif
-    (void)dir;
-    int narrow = 1, near = 1;
-    for (int a = 0; a < 3; a++) {
-        narrow &= dhi[a] - dlo[a] <= SC_STREAM_SPREAD;
-        near &= ohi[a] - olo[a] <= SC_STREAM_ORIGINS * (hi[a] - lo[a]);
+    for (; i < cnt; i++) {
+        char *o = out + i * out_stride;
+        memcpy(o + offsetof(sc_hitrec, t), &h->t[i], 4), memcpy(o + offsetof(sc_hitrec, u), &h->u[i], 4);
+        memcpy(o + offsetof(sc_hitrec, v), &h->v[i], 4), memcpy(o + offsetof(sc_hitrec, prim), &h->prim[i], 4);
+        memcpy(o + offsetof(sc_hitrec, ng), &h->ng_x[i], 4), memcpy(o + offsetof(sc_hitrec, ng) + 4, &h->ng_y[i], 4);
+        memcpy(o + offsetof(sc_hitrec, ng) + 8, &h->ng_z[i], 4);
+        memcpy(o + offsetof(sc_hitrec, geom), &h->geom[i], 4), memcpy(o + offsetof(sc_hitrec, inst), &h->inst[i], 4);
     }
-    return narrow || near;
 }
 
-/* A quick "no" before the transpose: the first and the last ray of a run
+/* A quick "no" before the gather: the first and the last ray of a run
  * (opposite corners of a pixel tile) already differ more in direction and
  * in origin than a coherent run may. Random rays leave here. */
 static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi)
@@ -272,58 +243,39 @@ static sc_status stream_packet(const sc_stream_target *T, const char *rays, size
 #define RAY(j) ((const sc_ray *)(const void *)(rays + (base + (j)) * ray_stride))
 #define OUT(j) (out + (base + (j)) * out_stride)
     sc_ray_packet16 p __attribute__((aligned(64)));
-    int32_t valid[16];
-    float *soa = p.ox;
-    if (cnt == 16 && pair_incoherent(RAY(0), RAY(15), T->lo, T->hi))
-        goto one_by_one;
-#if defined(__SSE2__)
+    uint32_t lanes = 0;
     if (cnt == 16) {
-        /* rows ox oy oz tmin dx dy dz tmax: 4x4 transposes of the rays'
-         * two halves (sc_ray is org, tmin, dir, tmax) */
-        for (unsigned i = 0; i < 16; i += 4)
-            for (unsigned h = 0; h < 8; h += 4) {
-                __m128 r0 = _mm_loadu_ps(RAY(i)->org + h), r1 = _mm_loadu_ps(RAY(i + 1)->org + h);
-                __m128 r2 = _mm_loadu_ps(RAY(i + 2)->org + h), r3 = _mm_loadu_ps(RAY(i + 3)->org + h);
-                _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-                _mm_store_ps(soa + (h + 0) * 16 + i, r0);
-                _mm_store_ps(soa + (h + 1) * 16 + i, r1);
-                _mm_store_ps(soa + (h + 2) * 16 + i, r2);
-                _mm_store_ps(soa + (h + 3) * 16 + i, r3);
-            }
-        for (unsigned i = 0; i < 16; i++)
-            valid[i] = 1;
-    } else
-#endif
-    {
+        if (pair_incoherent(RAY(0), RAY(15), T->lo, T->hi))
+            goto one_by_one;
+        const int g = sc_kernels_active()->trace[0].stream_gather16(rays + base * ray_stride, ray_stride, T->lo,
+                                                                      T->hi, &p);
+        if (g != SC_GATHER_COHERENT)
+            goto one_by_one;
+        lanes = 0xffff;
+    } else {
+        /* the tail of the stream; the unused lanes repeat its last ray */
         for (unsigned i = 0; i < 16; i++) {
             const sc_ray *r = RAY(i < cnt ? i : cnt - 1);
-            valid[i] = i < cnt;
+            if (i < cnt && !sc_ray_valid(r))
+                goto one_by_one;
             p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
             p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
         }
+        lanes = (1u << cnt) - 1;
     }
-    if (cnt == 16 && !packet_coherent(&p, T->lo, T->hi))
-        goto one_by_one;
     if (any) {
         int32_t occ[16];
-        if (T->packet16(T->obj, valid, &p, occ, 1, stats) == SC_OK) {
-            for (unsigned i = 0; i < cnt; i++)
-                *(int32_t *)(void *)OUT(i) = occ[i];
-            return SC_OK;
-        }
+        T->packet16(T->obj, lanes, &p, occ, 1, stats);
+        for (unsigned i = 0; i < cnt; i++)
+            memcpy(OUT(i), &occ[i], sizeof occ[i]);
     } else {
         sc_hit_packet16 h __attribute__((aligned(64)));
-        if (T->packet16(T->obj, valid, &p, &h, 0, stats) == SC_OK) {
-            for (unsigned i = 0; i < cnt; i++) {
-                sc_hitrec one;
-                sc_hit_lane_get(&h, 16, i, &one);
-                memcpy(OUT(i), &one, sizeof one);
-            }
-            return SC_OK;
-        }
+        T->packet16(T->obj, lanes, &p, &h, 0, stats);
+        hit_rows_to_records(&h, cnt, OUT(0), out_stride);
     }
+    return SC_OK;
 one_by_one:;
-    /* rays the coherence tests sent alone, or a packet with a refused ray
+    /* rays the coherence tests sent alone, or a run with a refused ray
      * (whose others are answered here) */
     sc_status status = SC_OK;
     for (unsigned i = 0; i < cnt; i++)
@@ -351,10 +303,10 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
 /* A BVH as a stream's target. Rays that failed the coherence tests go to
  * the kernels without the octant branch, which random directions
  * mispredict (not with statistics, which have one generic kernel anyway). */
-static sc_status bvh_packet16(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out,
-                              int any, sc_trace_stats *stats)
+static void bvh_packet16(const void *obj, uint32_t lanes, const sc_ray_packet16 *rays, void *out, int any,
+                         sc_trace_stats *stats)
 {
-    return any ? sc_trace_any16(obj, valid, rays, out, stats) : sc_trace_closest16(obj, valid, rays, out, stats);
+    sc_trace_packet_lanes(obj, lanes, rays->ox, 16, out, any, stats);
 }
 
 static sc_status bvh_single(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,

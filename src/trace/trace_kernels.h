@@ -54,6 +54,10 @@ typedef struct sc_trace_kernels {
      * (traverse_top_packet.h); out: the hit packet or W int32_t. */
     void (*top_packet)(const struct sc_top *top, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
                        sc_trace_stats *st);
+    /* A stream's run of 16 rays into a packet, checked, and whether it is
+     * coherent (stream_gather.h), the same in every row. */
+    int (*stream_gather16)(const char *rays, size_t ray_stride, const float *lo, const float *hi,
+                           sc_ray_packet16 *packet);
 } sc_trace_kernels;
 
 /* [sc_tri_test]. The x86 tables exist only in x86 builds. */

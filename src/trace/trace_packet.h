@@ -51,15 +51,15 @@ static inline void sc_hit_lane_get(const void *packet, unsigned W, unsigned i, s
     h->geom = u[7 * W + i], h->inst = u[8 * W + i];
 }
 
-/* What a stream traces: a 16-ray packet (valid lanes checked by the
- * callee: returns non-OK, writing nothing, if one is refused) and single
+/* What a stream traces: lanes `lanes` of a 16-ray packet (rays already
+ * checked as sc_ray_valid; out as for sc_trace_packet_lanes) and single
  * rays (incoherent: a ray the coherence tests sent alone; checked by the
  * callee). lo/hi: the scene's box, the scale of the origin test. */
 typedef struct sc_stream_target {
     const void *obj;
     const float *lo, *hi;
-    sc_status (*packet16)(const void *obj, const int32_t valid[16], const sc_ray_packet16 *rays, void *out, int any,
-                          sc_trace_stats *stats);
+    void (*packet16)(const void *obj, uint32_t lanes, const sc_ray_packet16 *rays, void *out, int any,
+                     sc_trace_stats *stats);
     sc_status (*single)(const void *obj, const sc_ray *ray, void *out, int any, int incoherent,
                         sc_trace_stats *stats);
 } sc_stream_target;

@@ -5,6 +5,7 @@
 #include "node_bvh8_slab.h"
 #include "ray_setup.h"
 #include "simd/sphere_kernels.h"
+#include "stream_gather.h"
 #include "tri_exact.h"
 #include "tri_moller.h"
 #include "traverse_stack.h"
@@ -38,6 +39,12 @@ static inline unsigned node_test_par(const trace_ctx *c, const sc_bvh_node8 *nod
                                      float *dist)
 {
     return sc_slab_par(&c->pre, node, tmin, tmax, dist);
+}
+
+static int stream_gather16(const char *rays, size_t ray_stride, const float *lo, const float *hi,
+                           sc_ray_packet16 *p)
+{
+    return sc_stream_gather16_ref(rays, ray_stride, lo, hi, p);
 }
 
 /* The sphere kernels of the scalar level (the specification, lane by lane). */

@@ -341,7 +341,9 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 #include "traverse_top_bvh8.h"
 #include "traverse_top_packet.h"
 
-#define SC_TRACE_TOP , .top_closest = top_closest, .top_any = top_any, .top_packet = top_packet
+#define SC_TRACE_TOP                                                                                  \
+    , .top_closest = top_closest, .top_any = top_any, .top_packet = top_packet,                       \
+    .stream_gather16 = stream_gather16
 
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \

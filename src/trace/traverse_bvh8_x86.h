@@ -11,6 +11,7 @@
 
 #include "node_bvh8_slab_x86.h"
 #include "ray_setup_x86.h"
+#include "stream_gather_x86.h"
 #include "tri_exact_x86.h"
 #include "tri_moller_x86.h"
 #include "tri_watertight_x86.h"
