@@ -85,20 +85,34 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
         c->xK = _mm256_set1_ps(xK);
         c->xc0 = _mm256_set1_ps(xc0);
     }
-    /* the shear of the watertight test, as sc_ray_precompute_shear */
-    const float *dd = r->dir;
-    int kx, ky, kz;
-    sc_shear_axes(dd, &kx, &ky, &kz);
-    c->kx = kx, c->ky = ky, c->kz = kz;
-    c->okx = _mm256_set1_ps(r->org[kx]);
-    c->oky = _mm256_set1_ps(r->org[ky]);
-    c->okz = _mm256_set1_ps(r->org[kz]);
-    c->Sx = _mm256_set1_ps(dd[kx] / dd[kz]);
-    c->Sy = _mm256_set1_ps(dd[ky] / dd[kz]);
-    const float rdk[3] = { rd[0], rd[1], rd[2] };   /* 1 / d, already divided */
-    c->Sz = _mm256_set1_ps(rdk[kz]);
+    /* The shear of the watertight test, as sc_ray_precompute_shear, without
+     * a branch: sc_shear_axes's selects on the axes, followed by loads at
+     * those axes, were compiled into one branch per case, which random
+     * directions mispredict. Here the axes come from the compare bits
+     * through tables, and the values at them by a variable permute. */
+    const __m128 ad = _mm_andnot_ps(sgn, d);
+    const __m128 ad_yzz = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 2, 2, 1));   /* |d1| |d2| |d2| */
+    const __m128 ad_xxy = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 1, 0, 0));   /* |d0| |d0| |d1| */
+    const int gt = _mm_movemask_ps(_mm_cmpgt_ps(ad_yzz, ad_xxy)) & 7;        /* d1>d0, d2>d0, d2>d1 */
+    static const int8_t kz_of[8] = { 0, 1, 2, 1, 0, 2, 2, 2 };
+    const int kz = kz_of[gt];
+    const int neg = (_mm_movemask_ps(d) >> kz) & 1;
+    /* [2 kz + neg]: kx, ky, kz, and lane 3 */
+    static const int32_t axes[6][4] __attribute__((aligned(16))) = {
+        { 1, 2, 0, 3 }, { 2, 1, 0, 3 }, { 2, 0, 1, 3 }, { 0, 2, 1, 3 }, { 0, 1, 2, 3 }, { 1, 0, 2, 3 },
+    };
+    const int32_t *ax = axes[2 * kz + neg];
+    const __m128i ctl = _mm_load_si128((const __m128i *)(const void *)ax);
+    c->kx = ax[0], c->ky = ax[1], c->kz = kz;
+    const __m128 ds = _mm_permutevar_ps(d, ctl), os = _mm_permutevar_ps(o, ctl);   /* at kx, ky, kz */
+    const __m128 sxy = _mm_div_ps(ds, _mm_permute_ps(ds, 0xaa));                 /* d[kx] / d[kz], d[ky] / d[kz] */
+    const __m128 sz = _mm_permutevar_ps(rd, ctl);                                /* 1 / d[kz], already divided */
+#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
+    c->okx = BC(os, 0), c->oky = BC(os, 1), c->okz = BC(os, 2);
+    c->Sx = BC(sxy, 0), c->Sy = BC(sxy, 1), c->Sz = BC(sz, 2);
+#undef BC
     for (int k = 0; k < 3; k++)
-        c->org_s[k] = r->org[k], c->dir_s[k] = dd[k];
+        c->org_s[k] = r->org[k], c->dir_s[k] = r->dir[k];
 }
 
 /* The near and far rows of a non-parallel ray whose octant is not a
