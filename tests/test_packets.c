@@ -697,6 +697,20 @@ static void test_repeated_vertices(void **state)
 static void test_shear_ties(void **state)
 {
     (void)state;
+    /* the rule itself, worked out by hand: the first of tied largest
+     * components is kz; kx, ky follow it cyclically, swapped for d[kz] < 0 */
+    const struct { float d[3]; int kx, ky, kz; } want[] = {
+        { { 1, 1, 1 }, 1, 2, 0 },  { { -1, 1, 1 }, 2, 1, 0 }, { { 1, 2, 2 }, 2, 0, 1 },
+        { { 1, -2, 2 }, 0, 2, 1 }, { { 0, 0, -3 }, 1, 0, 2 }, { { 2, -2, 1 }, 1, 2, 0 },
+        { { 0.5f, 0.25f, 1 }, 0, 1, 2 }, { { -0.0f, 0, 1 }, 0, 1, 2 }, { { 3, -1, -3 }, 1, 2, 0 },
+    };
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        int kx, ky, kz;
+        sc_shear_axes(want[i].d, &kx, &ky, &kz);
+        if (kx != want[i].kx || ky != want[i].ky || kz != want[i].kz)
+            fail_msg("d = (%g, %g, %g): axes %d %d %d, want %d %d %d", want[i].d[0], want[i].d[1], want[i].d[2], kx,
+                     ky, kz, want[i].kx, want[i].ky, want[i].kz);
+    }
     tmesh m = { 0 };
     const double c[3] = { 0.1, -0.05, 0.02 };
     scene_icosphere(&m, 3, 1.0, c);

@@ -87,22 +87,26 @@ SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
  * -1 decided per ray (the counting kernels). */
 #define SC_OCT_ANY 8
 
-/* Woop et al.'s axes: kz = the largest |d| component, kx and ky the other
- * two, swapped for d[kz] < 0 to keep the winding (matters only for
- * one-sided tests). Written as selects, not branches: for incoherent rays
- * the axes are random and branches on them mispredict. */
+/* Woop et al.'s axes: kz = the largest |d| component (the first of tied
+ * ones), kx and ky the other two, swapped for d[kz] < 0 to keep the winding
+ * (matters only for one-sided tests). For incoherent rays the axes are
+ * random, so there must be no branch on them: the choice goes through
+ * tables indexed by the compare bits. (Selects were not enough: the
+ * compiler turned them, with the loads at the chosen axes that follow, into
+ * one branch per case.) ray_setup_x86.h makes the same choice in vectors. */
+/* kz from the compare bits a1 > a0 (bit 0), a2 > a0 (bit 1), a2 > a1 (bit 2) */
+static const unsigned char sc_shear_kz_of[8] = { 0, 1, 2, 1, 0, 2, 2, 2 };
+
 SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, int *kz_out)
 {
     const float a0 = fabsf(d[0]), a1 = fabsf(d[1]), a2 = fabsf(d[2]);
-    int kz = a1 > a0;
-    const float am = kz ? a1 : a0;
-    kz = a2 > am ? 2 : kz;
-    const float dz = kz == 0 ? d[0] : kz == 1 ? d[1] : d[2];
-    const int kx = kz == 2 ? 0 : kz + 1;
-    const int ky = kx == 2 ? 0 : kx + 1;
-    const int neg = dz < 0;
-    *kx_out = neg ? ky : kx;
-    *ky_out = neg ? kx : ky;
+    const unsigned gt = (unsigned)(a1 > a0) | (unsigned)(a2 > a0) << 1 | (unsigned)(a2 > a1) << 2;
+    const int kz = sc_shear_kz_of[gt];
+    /* [2 kz + (d[kz] < 0)]: kx, ky */
+    static const unsigned char axes[6][2] = { { 1, 2 }, { 2, 1 }, { 2, 0 }, { 0, 2 }, { 0, 1 }, { 1, 0 } };
+    const unsigned char *ax = axes[2 * kz + (d[kz] < 0)];
+    *kx_out = ax[0];
+    *ky_out = ax[1];
     *kz_out = kz;
 }
 

@@ -94,8 +94,7 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     const __m128 ad_yzz = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 2, 2, 1));   /* |d1| |d2| |d2| */
     const __m128 ad_xxy = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 1, 0, 0));   /* |d0| |d0| |d1| */
     const int gt = _mm_movemask_ps(_mm_cmpgt_ps(ad_yzz, ad_xxy)) & 7;        /* d1>d0, d2>d0, d2>d1 */
-    static const int8_t kz_of[8] = { 0, 1, 2, 1, 0, 2, 2, 2 };
-    const int kz = kz_of[gt];
+    const int kz = sc_shear_kz_of[gt];
     const int neg = (_mm_movemask_ps(d) >> kz) & 1;
     /* [2 kz + neg]: kx, ky, kz, and lane 3 */
     static const int32_t axes[6][4] __attribute__((aligned(16))) = {
