@@ -25,6 +25,7 @@
 #include "bvh_test_util.h"
 #include "isa/isa_dispatch.h"
 #include "trace/stream_gather.h"
+#include "trace/tri_exact.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
@@ -778,6 +779,91 @@ static void test_shear_ties(void **state)
     tmesh_free(&m);
 }
 
+/* Rays through vertices shared by several triangles: those triangles are
+ * hit at exactly the same t, and every kernel must then report the smallest
+ * primitive id, whatever order it visits the leaves in. The expected id is
+ * found by brute force with the exact primitives (sc_exact_hit_test,
+ * sc_exact_cmp_t), for the exact test on every ISA and leaf size. */
+static void test_exact_ties(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const int G = 10;
+    uint32_t v[11][11];
+    for (int i = 0; i <= G; i++)
+        for (int j = 0; j <= G; j++)
+            v[i][j] = tmesh_vertex(&m, i * 0.25, j * 0.25, ((i * 3 + j * 5) % 4) * 0.0625);
+    /* a height field with alternating diagonals: an interior vertex is in
+     * 4 or 8 triangles */
+    for (int i = 0; i < G; i++)
+        for (int j = 0; j < G; j++) {
+            if ((i + j) & 1) {
+                tmesh_tri(&m, v[i][j], v[i + 1][j], v[i + 1][j + 1]);
+                tmesh_tri(&m, v[i][j], v[i + 1][j + 1], v[i][j + 1]);
+            } else {
+                tmesh_tri(&m, v[i][j], v[i + 1][j], v[i][j + 1]);
+                tmesh_tri(&m, v[i + 1][j], v[i + 1][j + 1], v[i][j + 1]);
+            }
+        }
+    enum { NR = 16 * 24 };
+    sc_ray rays[NR];
+    for (int r = 0; r < NR; r++) {
+        const int i = 1 + r % (G - 1), j = 1 + (r / (G - 1)) % (G - 1);
+        const float *p = &m.pos[3 * v[i][j]];
+        /* dyadic directions: the origin and the vertex lie exactly on the ray */
+        const double d[3] = { (r % 3 - 1) * 0.125, ((r / 3) % 3 - 1) * 0.0625, r & 1 ? -1.0 : 1.0 };
+        double o[3];
+        for (int k = 0; k < 3; k++)
+            o[k] = p[k] - 4 * d[k];
+        set_ray(&rays[r], o, d, 0.0f, INFINITY);
+    }
+    uint32_t want[NR];
+    size_t ties = 0;
+    for (int r = 0; r < NR; r++) {
+        want[r] = SC_HITREC_MISS;
+        float wt[9];
+        int hits = 0;
+        for (size_t t = 0; t < m.nt; t++) {
+            float tv[9];
+            for (int c = 0; c < 3; c++)
+                for (int k = 0; k < 3; k++)
+                    tv[3 * c + k] = m.pos[3 * m.idx[3 * t + (size_t)c] + k];
+            if (!sc_exact_hit_test(&rays[r], tv))
+                continue;
+            hits++;
+            const int cmp = want[r] == SC_HITREC_MISS ? -1 : sc_exact_cmp_t(&rays[r], tv, wt);
+            if (cmp < 0 || (cmp == 0 && t < want[r])) {
+                ties += cmp == 0;
+                want[r] = (uint32_t)t;
+                memcpy(wt, tv, sizeof wt);
+            } else {
+                ties += cmp == 0;
+            }
+        }
+        assert_true(hits >= 1);
+    }
+    assert_true(ties > (size_t)NR);   /* most rays meet a fan of several triangles at one t */
+    const sc_isa start = sc_isa_active();
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        for (int leaf = 4; leaf <= 16; leaf *= 2) {
+            sc_bvh *b = build(&m, leaf, SC_PREFILTER_OFF, SC_TRI_EXACT);
+            for (int r = 0; r < NR; r++) {
+                sc_hitrec h;
+                assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
+                if (h.prim != want[r])
+                    fail_msg("isa %s leaf %d ray %d: prim %u, the smallest at the nearest exact t is %u",
+                             sc_isa_name((sc_isa)isa), leaf, r, h.prim, want[r]);
+            }
+            sc_bvh_free(b);
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    tmesh_free(&m);
+}
+
 static void test_bunny(void **state)
 {
     (void)state;
@@ -806,6 +892,7 @@ int main(void)
         cmocka_unit_test(test_soup_slivers),
         cmocka_unit_test(test_repeated_vertices),
         cmocka_unit_test(test_shear_ties),
+        cmocka_unit_test(test_exact_ties),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

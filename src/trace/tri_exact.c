@@ -537,7 +537,9 @@ static int in_range(const sc_ray *r, sc_exact_hit *c)
     }
 }
 
-/* 1 iff c's exact t is smaller than b's (ties keep b) */
+/* 1 iff c's exact t is smaller than b's, or equal and c's primitive id the
+ * smaller: the tie rule of every kernel, so that the answer does not depend
+ * on the order in which the leaves are visited */
 static int closer(const sc_ray *r, sc_exact_hit *c, sc_exact_hit *b)
 {
     for (;;) {
@@ -556,7 +558,8 @@ static int closer(const sc_ray *r, sc_exact_hit *c, sc_exact_hit *b)
         float ta[9], tb[9];
         load_tri(c->rows, c->W, c->lane, ta);
         load_tri(b->rows, b->W, b->lane, tb);
-        return sc_exact_cmp_t(r, ta, tb) < 0;
+        const int cmp = sc_exact_cmp_t(r, ta, tb);
+        return cmp < 0 || (cmp == 0 && c->prim < b->prim);
     }
 }
 
