@@ -26,6 +26,10 @@
 #include "traverse_stack.h"
 #include "tri_exact.h"
 
+/* the near-first order of hit children: a level may bring its own */
+#ifndef SC_ORDER_CHILDREN
+#define SC_ORDER_CHILDREN sc_order_children
+#endif
 #define SC_TRAVERSE_INLINE static inline __attribute__((always_inline)) SC_TARGET
 
 SC_TRAVERSE_INLINE int
@@ -91,7 +95,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
                     stack[sp++].ref = node->child[31 - __builtin_clz(m)];
                 continue;
             }
-            ref = sc_order_children(node, m, dist, stack, &sp);
+            ref = SC_ORDER_CHILDREN(node, m, dist, stack, &sp);
         }
         {
             const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);

@@ -13,6 +13,7 @@ typedef struct sc_stack_entry {
     uint64_t ref;
     float dist;
 } sc_stack_entry;
+_Static_assert(sizeof(sc_stack_entry) == 16, "two stack entries a 32-byte store, four a 64-byte one");
 
 /* Near-first order: the hit children sorted by entry distance (ties by slot),
  * all but the nearest pushed far-to-near; returns the nearest. The caller
