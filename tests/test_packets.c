@@ -590,6 +590,35 @@ static void test_stream_gather(void **state)
     tmesh_free(&m);
 }
 
+/* Every ISA level's single rays (closest and any) against the scalar
+ * kernel's answers ref / occ_ref, bit for bit, and the level's packets of
+ * the same rays (16 at a time, all valid) against its single rays. */
+static void levels_match_scalar(const tmesh *m, int leaf, sc_tri_test tt, sc_ray *rays, int32_t *valid, size_t n,
+                                const sc_hitrec *ref, const int *occ_ref)
+{
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        sc_bvh *b = build(m, leaf, SC_PREFILTER_OFF, tt);
+        packets pk = { rays, valid, n };
+        size_t bad = 0;
+        for (size_t r = 0; r < n; r++) {
+            sc_hitrec h;
+            int o;
+            assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
+            assert_int_equal(sc_trace_any(b, &rays[r], &o, NULL), SC_OK);
+            bad += !(h.prim == ref[r].prim && same_bits(h.t, ref[r].t) && same_bits(h.u, ref[r].u) &&
+                     same_bits(h.v, ref[r].v) && o == occ_ref[r]);
+        }
+        bad += check(b, &pk, NULL);   /* packets against this level's single rays */
+        if (bad)
+            print_message("%s leaf %d %s: %zu differ\n", sc_tri_test_name(tt), leaf, sc_isa_name((sc_isa)isa), bad);
+        assert_int_equal(bad, 0);
+        sc_bvh_free(b);
+    }
+}
+
 /* Triangles whose sheared vertices coincide: a repeated vertex (every ray),
  * or an edge parallel to the ray (seen end-on). One edge function is then
  * exactly zero, and the optimised kernels skip the double-precision retest
@@ -661,28 +690,7 @@ static void test_repeated_vertices(void **state)
         }
         sc_bvh_free(b);
         assert_true(hits > n / 4);
-        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
-            if (!sc_isa_supported((sc_isa)isa))
-                continue;
-            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
-            b = build(&m, leaf, SC_PREFILTER_OFF, tt);
-            packets pk = { rays, valid, n };
-            size_t bad = 0;
-            for (size_t r = 0; r < n; r++) {
-                sc_hitrec h;
-                int o;
-                assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
-                assert_int_equal(sc_trace_any(b, &rays[r], &o, NULL), SC_OK);
-                bad += !(h.prim == ref[r].prim && same_bits(h.t, ref[r].t) && same_bits(h.u, ref[r].u) &&
-                         same_bits(h.v, ref[r].v) && o == occ_ref[r]);
-            }
-            bad += check(b, &pk, NULL);   /* packets against this level's single rays */
-            if (bad)
-                print_message("%s leaf %d %s: %zu differ\n", test ? "exact" : "watertight", leaf,
-                              sc_isa_name((sc_isa)isa), bad);
-            assert_int_equal(bad, 0);
-            sc_bvh_free(b);
-        }
+        levels_match_scalar(&m, leaf, tt, rays, valid, n, ref, occ_ref);
     }
     assert_int_equal(sc_isa_force(start), SC_OK);
     free(rays), free(valid), free(deg);
@@ -751,27 +759,7 @@ static void test_shear_ties(void **state)
         }
         sc_bvh_free(b);
         assert_true(hits > n / 2);
-        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
-            if (!sc_isa_supported((sc_isa)isa))
-                continue;
-            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
-            b = build(&m, 8, SC_PREFILTER_OFF, tt);
-            packets pk = { rays, valid, n };
-            size_t bad = 0;
-            for (size_t r = 0; r < n; r++) {
-                sc_hitrec h;
-                int o;
-                assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
-                assert_int_equal(sc_trace_any(b, &rays[r], &o, NULL), SC_OK);
-                bad += !(h.prim == ref[r].prim && same_bits(h.t, ref[r].t) && same_bits(h.u, ref[r].u) &&
-                         same_bits(h.v, ref[r].v) && o == occ_ref[r]);
-            }
-            bad += check(b, &pk, NULL);   /* packets against this level's single rays */
-            if (bad)
-                print_message("%s %s: %zu differ\n", test ? "exact" : "watertight", sc_isa_name((sc_isa)isa), bad);
-            assert_int_equal(bad, 0);
-            sc_bvh_free(b);
-        }
+        levels_match_scalar(&m, 8, tt, rays, valid, n, ref, occ_ref);
         free(ref), free(occ_ref);
     }
     assert_int_equal(sc_isa_force(start), SC_OK);
