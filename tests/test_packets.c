@@ -852,6 +852,56 @@ static void test_exact_ties(void **state)
     tmesh_free(&m);
 }
 
+/* Every level visits the same nodes and leaves as the scalar kernel, in the
+ * same order: the counters of closest-hit traversals (which cull by the
+ * best t so far, so the order of the leaves shows in them) must be equal.
+ * The AVX-512 level orders three or more hit children by a sorting network
+ * (traverse_bvh8_x86.h) that must give sc_order_children's order. (A
+ * check on the whole: an order wrong only for near-equal distances may
+ * still visit the same nodes here.) */
+static void test_same_visits(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 4, 1.0, c);
+    packets a, b;
+    make_packets(&m, K_CAMERA, 51, &a);
+    make_packets(&m, K_MIXED, 52, &b);
+    const sc_isa start = sc_isa_active();
+    for (int tt = 0; tt < 2; tt++) {
+        sc_trace_stats want[2];
+        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
+                continue;
+            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+            sc_bvh *bvh = build(&m, 4, SC_PREFILTER_OFF, tt ? SC_TRI_EXACT : SC_TRI_WATERTIGHT);
+            for (int k = 0; k < 2; k++) {
+                const packets *pk = k ? &b : &a;
+                sc_trace_stats st;
+                memset(&st, 0, sizeof st);
+                for (size_t r = 0; r < pk->n; r++) {
+                    sc_hitrec h;
+                    assert_int_equal(sc_trace_closest(bvh, &pk->rays[r], &h, &st), SC_OK);
+                }
+                assert_true(st.nodes > 2 * st.rays);
+                if (isa == SC_ISA_SCALAR)
+                    want[k] = st;
+                else if (st.nodes != want[k].nodes || st.leaves != want[k].leaves || st.tri_tests != want[k].tri_tests)
+                    fail_msg("%s, %s rays, %s: %llu nodes %llu leaves %llu triangles; scalar %llu %llu %llu",
+                             tt ? "exact" : "watertight", k ? "mixed" : "camera", sc_isa_name((sc_isa)isa),
+                             (unsigned long long)st.nodes, (unsigned long long)st.leaves,
+                             (unsigned long long)st.tri_tests, (unsigned long long)want[k].nodes,
+                             (unsigned long long)want[k].leaves, (unsigned long long)want[k].tri_tests);
+            }
+            sc_bvh_free(bvh);
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    free(a.rays), free(a.valid), free(b.rays), free(b.valid);
+    tmesh_free(&m);
+}
+
 static void test_bunny(void **state)
 {
     (void)state;
@@ -881,6 +931,7 @@ int main(void)
         cmocka_unit_test(test_repeated_vertices),
         cmocka_unit_test(test_shear_ties),
         cmocka_unit_test(test_exact_ties),
+        cmocka_unit_test(test_same_visits),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

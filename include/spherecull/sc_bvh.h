@@ -144,7 +144,7 @@ SC_API void sc_bvh_free(sc_bvh *bvh);
  * mesh (the same triangle count and indices the BVH was built from, new
  * positions), the tree itself kept. The result answers every ray exactly
  * as a fresh build over the new vertices does (the same hits, bit for bit,
- * except that of SC_TRI_EXACT's exact ties another may be reported; the
+ * except that SC_TRI_EXACT's rounded t, u, v may differ in the last bits; the
  * same guarantees: conservative boxes, spheres that contain their
  * triangles); only the work per ray can grow, as sc_bvh_info.sah_cost
  * against built_sah_cost says (sc_accel.h rebuilds past a measured

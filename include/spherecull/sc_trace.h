@@ -31,7 +31,7 @@
  *                      faces, edges and vertices included, a ray in the
  *                      triangle's plane never hits), tmin <= t <= tmax, and
  *                      the closest hit (smallest exact t = (A-O).n / D.n; of
- *                      exact ties the first found). A float filter with
+ *                      exact ties the smallest primitive id). A float filter with
  *                      rigorous error bounds decides almost every lane; the
  *                      rest fall back to double and then to exact integer
  *                      arithmetic (libc/libm only). t, u, v stay rounded.
@@ -110,8 +110,8 @@ SC_API sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occlude
 
 /* Brute force over all triangles with the BVH's own triangle test and
  * precision: no tree, for debugging and as a same-arithmetic cross-check.
- * (With SC_TRI_EXACT the decisions are the same as sc_trace_closest's; of
- * exact ties another triangle may be reported.) */
+ * (With SC_TRI_EXACT the same triangle as sc_trace_closest; its rounded t, u
+ * and v may differ in the last bits.) */
 SC_API sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
 
 /* ---- packets ---------------------------------------------------------------

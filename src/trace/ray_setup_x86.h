@@ -86,10 +86,9 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
         c->xc0 = _mm256_set1_ps(xc0);
     }
     /* The shear of the watertight test, as sc_ray_precompute_shear, without
-     * a branch: sc_shear_axes's selects on the axes, followed by loads at
-     * those axes, were compiled into one branch per case, which random
-     * directions mispredict. Here the axes come from the compare bits
-     * through tables, and the values at them by a variable permute. */
+     * a branch (random directions would mispredict it): the axes from the
+     * compare bits through sc_shear_axes's table, and the values at them by
+     * a variable permute. */
     const __m128 ad = _mm_andnot_ps(sgn, d);
     const __m128 ad_yzz = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 2, 2, 1));   /* |d1| |d2| |d2| */
     const __m128 ad_xxy = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 1, 0, 0));   /* |d0| |d0| |d1| */

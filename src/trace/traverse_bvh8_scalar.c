@@ -89,8 +89,7 @@ static inline unsigned leaf_test(const trace_ctx *c, const float *rows, unsigned
 const sc_trace_kernels sc_trace_kernels_scalar[SC_TRI_TEST_COUNT] = SC_TRACE_KERNEL_TABLE;
 
 /* Every leaf, no box tests, no prefilter: a same-arithmetic oracle for the
- * traversal (of equal t the smaller id, as the traversal; with SC_TRI_EXACT
- * the first exact tie found). */
+ * traversal (of equal t the smaller id, as the traversal, for every test). */
 sc_status sc_trace_closest_brute(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit)
 {
     if (!bvh || !ray || !hit || !sc_ray_valid(ray))

@@ -139,16 +139,17 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
 /* sc_order_children with three or more hit children as a sorting network
  * instead of an insertion sort, whose exits incoherent rays mispredict
  * (random rays 5-20 % faster; camera rays, whose order the insertion sort's
- * branches predict, up to 6 % slower: docs/compare.md, fifteenth session):
- * keys (distance bits with the low three replaced by the slot; hits are
- * >= 0, misses -1) sorted descending in one ymm, the children and distances
- * permuted into that order, all eight entries stored, and the stack pointer
- * moved past the hits but the nearest, which is returned. The same order
- * as sc_order_children (ties by slot) but for distances equal in all but
- * their last three bits, which go by slot. */
-SC_X86_INLINE __m256i sort8_desc_step(__m256i v, __m256i p, const int take_max)
+ * branches predict, up to 6 % slower: docs/compare.md, fifteenth session).
+ * The keys are 64 bits, the distance's bits above the slot, so the order is
+ * sc_order_children's exactly (ties by slot; -0 as 0), and the traversal
+ * visits leaves in the same order on every ISA level (the exact test's
+ * reported t, u, v can depend on it). Hits are sorted descending (misses
+ * -1, last) in one zmm register, the child references permuted into that
+ * order, all eight stack entries stored, and the stack pointer moved past
+ * the hits but the nearest, which is returned. */
+SC_X86_INLINE __m512i sort8_desc_step(__m512i v, __m512i p, const __mmask8 take_max)
 {
-    return _mm256_blend_epi32(_mm256_min_epi32(v, p), _mm256_max_epi32(v, p), take_max);
+    return _mm512_mask_blend_epi64(take_max, _mm512_min_epi64(v, p), _mm512_max_epi64(v, p));
 }
 
 SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, const float *dist,
@@ -157,15 +158,15 @@ SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, c
     const unsigned rest = mask & (mask - 1);
     if ((rest & (rest - 1)) == 0)
         return sc_order_children(node, mask, dist, stack, sp);
-    const __m256i slot = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    const __m256 d = _mm256_load_ps(dist);
-    __m256i v = _mm256_max_epi32(_mm256_castps_si256(d), _mm256_setzero_si256());   /* -0 -> 0 */
-    v = _mm256_or_si256(_mm256_andnot_si256(_mm256_set1_epi32(7), v), slot);
-    v = _mm256_mask_blend_epi32((__mmask8)mask, _mm256_set1_epi32(-1), v);
+    const __m256i bits = _mm256_max_epi32(_mm256_load_si256((const __m256i *)(const void *)dist),
+                                          _mm256_setzero_si256());   /* -0 -> 0; hits are >= 0 */
+    __m512i v = _mm512_or_si512(_mm512_slli_epi64(_mm512_cvtepu32_epi64(bits), 32),
+                                _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7));
+    v = _mm512_mask_blend_epi64((__mmask8)mask, _mm512_set1_epi64(-1), v);
     /* bitonic network; partners i ^ 1, i ^ 2, i ^ 4 */
-#define P1(x) _mm256_shuffle_epi32((x), 0xb1)
-#define P2(x) _mm256_shuffle_epi32((x), 0x4e)
-#define P4(x) _mm256_permute4x64_epi64((x), 0x4e)
+#define P1(x) _mm512_shuffle_epi32((x), (_MM_PERM_ENUM)0x4e)
+#define P2(x) _mm512_permutex_epi64((x), 0x4e)
+#define P4(x) _mm512_shuffle_i64x2((x), (x), 0x4e)
     v = sort8_desc_step(v, P1(v), 0x99);
     v = sort8_desc_step(v, P2(v), 0xc3);
     v = sort8_desc_step(v, P1(v), 0xa5);
@@ -175,11 +176,10 @@ SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, c
 #undef P1
 #undef P2
 #undef P4
-    const __m256i idx = _mm256_and_si256(v, _mm256_set1_epi32(7));
-    const __m512i refs = _mm512_permutexvar_epi64(_mm512_cvtepu32_epi64(idx),
+    const __m512i refs = _mm512_permutexvar_epi64(_mm512_and_si512(v, _mm512_set1_epi64(7)),
                                                   _mm512_load_si512((const void *)node->child));
-    const __m512i dq = _mm512_cvtepu32_epi64(_mm256_castps_si256(_mm256_permutevar8x32_ps(d, idx)));
-    sc_stack_entry *s = stack + *sp;   /* sc_stack_entry: ref, dist, 4 bytes of padding */
+    const __m512i dq = _mm512_srli_epi64(v, 32);   /* the distance, and 0 as the entry's padding */
+    sc_stack_entry *s = stack + *sp;               /* sc_stack_entry: ref, dist, 4 bytes of padding */
     _mm512_storeu_si512((void *)s, _mm512_permutex2var_epi64(refs, _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11), dq));
     _mm512_storeu_si512((void *)(s + 4),
                         _mm512_permutex2var_epi64(refs, _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15), dq));

@@ -18,8 +18,8 @@
  * D.(b x c), D.(c x a), D.(a x b) have no two opposite signs and their sum
  * D.n is non-zero (both faces, edges and vertices included, a ray in the
  * triangle's plane never hits); t = a.n / D.n must satisfy tmin <= t <= tmax
- * exactly; the first hit is the smallest exact t, and of exact ties the one
- * found first is kept (all of them are in the oracle's tie set).
+ * exactly; the first hit is the smallest exact t, and of exact ties the
+ * smallest primitive id (all of them are in the oracle's tie set).
  * libc and libm only.
  */
 #ifndef SPHERECULL_TRACE_TRI_EXACT_H
