@@ -41,6 +41,11 @@ typedef struct packets {
     size_t n;             /* rays */
 } packets;
 
+static void packets_free(packets *p)
+{
+    free(p->rays), free(p->valid);
+}
+
 static void bounds(const tmesh *m, double lo[3], double hi[3])
 {
     for (int k = 0; k < 3; k++)
@@ -302,7 +307,7 @@ static void run_scene(const char *name, const tmesh *m, const int *leaves, int n
     if (sc_isa_supported(SC_ISA_AVX512))
         assert_true(culled_camera > 0);
     for (int k = 0; k < K_COUNT; k++)
-        free(pk[k].rays), free(pk[k].valid);
+        packets_free(&pk[k]);
 }
 
 static void test_icosphere(void **state)
@@ -341,7 +346,7 @@ static void test_other_tests(void **state)
         assert_int_equal(check(b, &pk, NULL), 0);
         sc_bvh_free(b);
     }
-    free(pk.rays), free(pk.valid);
+    packets_free(&pk);
     tmesh_free(&m);
 }
 
@@ -441,7 +446,7 @@ static void test_streams_incoherent(void **state)
     }
     assert_int_equal(sc_isa_force(start), SC_OK);
     free(ref), free(h), free(ref_occ), free(occ);
-    free(b.rays), free(b.valid);
+    packets_free(&b);
     tmesh_free(&m);
 }
 
@@ -510,7 +515,7 @@ static void test_streams(void **state)
                      SC_ERR_INVALID_ARGUMENT);
     sc_bvh_free(bvh);
     free(r), free(h);
-    free(a.rays), free(a.valid), free(b.rays), free(b.valid);
+    packets_free(&a), packets_free(&b);
     tmesh_free(&m);
 }
 
@@ -586,7 +591,7 @@ static void test_stream_gather(void **state)
     }
     assert_true(runs > 0);   /* the camera runs are coherent */
     assert_int_equal(sc_isa_force(start), SC_OK);
-    free(a.rays), free(a.valid), free(b.rays), free(b.valid);
+    packets_free(&a), packets_free(&b);
     tmesh_free(&m);
 }
 
@@ -898,7 +903,7 @@ static void test_same_visits(void **state)
         }
     }
     assert_int_equal(sc_isa_force(start), SC_OK);
-    free(a.rays), free(a.valid), free(b.rays), free(b.valid);
+    packets_free(&a), packets_free(&b);
     tmesh_free(&m);
 }
 

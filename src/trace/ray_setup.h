@@ -96,15 +96,18 @@ SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
  * one branch per case.) ray_setup_x86.h makes the same choice in vectors. */
 /* kz from the compare bits a1 > a0 (bit 0), a2 > a0 (bit 1), a2 > a1 (bit 2) */
 static const unsigned char sc_shear_kz_of[8] = { 0, 1, 2, 1, 0, 2, 2, 2 };
+/* [2 kz + (d[kz] < 0)]: kx, ky, kz, and 3 (a permute control for the SIMD
+ * set-up, whose lane 3 is not used) */
+static const int32_t sc_shear_axes_of[6][4] __attribute__((aligned(16))) = {
+    { 1, 2, 0, 3 }, { 2, 1, 0, 3 }, { 2, 0, 1, 3 }, { 0, 2, 1, 3 }, { 0, 1, 2, 3 }, { 1, 0, 2, 3 },
+};
 
 SC_TRACE_INLINE void sc_shear_axes(const float d[3], int *kx_out, int *ky_out, int *kz_out)
 {
     const float a0 = fabsf(d[0]), a1 = fabsf(d[1]), a2 = fabsf(d[2]);
     const unsigned gt = (unsigned)(a1 > a0) | (unsigned)(a2 > a0) << 1 | (unsigned)(a2 > a1) << 2;
     const int kz = sc_shear_kz_of[gt];
-    /* [2 kz + (d[kz] < 0)]: kx, ky */
-    static const unsigned char axes[6][2] = { { 1, 2 }, { 2, 1 }, { 2, 0 }, { 0, 2 }, { 0, 1 }, { 1, 0 } };
-    const unsigned char *ax = axes[2 * kz + (d[kz] < 0)];
+    const int32_t *ax = sc_shear_axes_of[2 * kz + (d[kz] < 0)];
     *kx_out = ax[0];
     *ky_out = ax[1];
     *kz_out = kz;

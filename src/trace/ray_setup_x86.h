@@ -87,7 +87,7 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     }
     /* The shear of the watertight test, as sc_ray_precompute_shear, without
      * a branch (random directions would mispredict it): the axes from the
-     * compare bits through sc_shear_axes's table, and the values at them by
+     * compare bits through sc_shear_axes's tables, and the values at them by
      * a variable permute. */
     const __m128 ad = _mm_andnot_ps(sgn, d);
     const __m128 ad_yzz = _mm_shuffle_ps(ad, ad, _MM_SHUFFLE(3, 2, 2, 1));   /* |d1| |d2| |d2| */
@@ -95,11 +95,7 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     const int gt = _mm_movemask_ps(_mm_cmpgt_ps(ad_yzz, ad_xxy)) & 7;        /* d1>d0, d2>d0, d2>d1 */
     const int kz = sc_shear_kz_of[gt];
     const int neg = (_mm_movemask_ps(d) >> kz) & 1;
-    /* [2 kz + neg]: kx, ky, kz, and lane 3 */
-    static const int32_t axes[6][4] __attribute__((aligned(16))) = {
-        { 1, 2, 0, 3 }, { 2, 1, 0, 3 }, { 2, 0, 1, 3 }, { 0, 2, 1, 3 }, { 0, 1, 2, 3 }, { 1, 0, 2, 3 },
-    };
-    const int32_t *ax = axes[2 * kz + neg];
+    const int32_t *ax = sc_shear_axes_of[2 * kz + neg];
     const __m128i ctl = _mm_load_si128((const __m128i *)(const void *)ax);
     c->kx = ax[0], c->ky = ax[1], c->kz = kz;
     const __m128 ds = _mm_permutevar_ps(d, ctl), os = _mm_permutevar_ps(o, ctl);   /* at kx, ky, kz */

@@ -3,7 +3,8 @@
  * rows, checked and reduced as sc_stream_gather16_ref does, with the same
  * answers: the checks are sc_ray_valid's compares, and the coherence bounds
  * are the same minima and maxima of the same products (1 / L1 by a division).
- * Part of an x86 traversal translation unit (traverse_bvh8_x86.h). */
+ * Part of an x86 traversal translation unit (traverse_bvh8_x86.h), after
+ * simd_vec.h with its 8-lane shape. */
 #ifndef SPHERECULL_TRACE_STREAM_GATHER_X86_H
 #define SPHERECULL_TRACE_STREAM_GATHER_X86_H
 
@@ -32,11 +33,7 @@ SC_X86_INLINE void transpose8x8(__m256 r[8])
 /* The spread (largest minus smallest lane) of hi's and lo's lanes. */
 SC_X86_INLINE float lanes_spread8(__m256 lo, __m256 hi)
 {
-    __m128 l = _mm_min_ps(_mm256_castps256_ps128(lo), _mm256_extractf128_ps(lo, 1));
-    __m128 h = _mm_max_ps(_mm256_castps256_ps128(hi), _mm256_extractf128_ps(hi, 1));
-    l = _mm_min_ps(l, _mm_movehl_ps(l, l)), h = _mm_max_ps(h, _mm_movehl_ps(h, h));
-    l = _mm_min_ss(l, _mm_shuffle_ps(l, l, 1)), h = _mm_max_ss(h, _mm_shuffle_ps(h, h, 1));
-    return _mm_cvtss_f32(h) - _mm_cvtss_f32(l);
+    return -f32x8_hmin(_mm256_sub_ps(_mm256_setzero_ps(), hi)) - f32x8_hmin(lo);
 }
 
 static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const float *lo, const float *hi,

@@ -210,14 +210,10 @@ static void hit_rows_to_records(const sc_hit_packet16 *h, unsigned cnt, char *ou
     for (unsigned j = 0; j < i; j++)
         memcpy(out + j * out_stride + offsetof(sc_hitrec, inst), &h->inst[j], sizeof h->inst[j]);
 #endif
-    for (; i < cnt; i++) {
-        char *o = out + i * out_stride;
-        memcpy(o + offsetof(sc_hitrec, t), &h->t[i], 4), memcpy(o + offsetof(sc_hitrec, u), &h->u[i], 4);
-        memcpy(o + offsetof(sc_hitrec, v), &h->v[i], 4), memcpy(o + offsetof(sc_hitrec, prim), &h->prim[i], 4);
-        memcpy(o + offsetof(sc_hitrec, ng), &h->ng_x[i], 4), memcpy(o + offsetof(sc_hitrec, ng) + 4, &h->ng_y[i], 4);
-        memcpy(o + offsetof(sc_hitrec, ng) + 8, &h->ng_z[i], 4);
-        memcpy(o + offsetof(sc_hitrec, geom), &h->geom[i], 4), memcpy(o + offsetof(sc_hitrec, inst), &h->inst[i], 4);
-    }
+    /* the rest field by field, into the record (which the one-by-one path
+     * writes as an sc_hitrec too) */
+    for (; i < cnt; i++)
+        sc_hit_lane_get(h, 16, i, (sc_hitrec *)(void *)(out + i * out_stride));
 }
 
 /* A quick "no" before the gather: the first and the last ray of a run

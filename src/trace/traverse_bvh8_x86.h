@@ -11,7 +11,6 @@
 
 #include "node_bvh8_slab_x86.h"
 #include "ray_setup_x86.h"
-#include "stream_gather_x86.h"
 #include "tri_exact_x86.h"
 #include "tri_moller_x86.h"
 #include "tri_watertight_x86.h"
@@ -25,6 +24,7 @@
 #define SC_VEC_F32X16
 #endif
 #include "simd/simd_vec.h"
+#include "stream_gather_x86.h"
 #define ATTR SC_TARGET
 #define RQUAL SC_X86_INLINE
 #define VP f32x4
