@@ -190,7 +190,14 @@ SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, c
 }
 #define SC_ORDER_CHILDREN order_children
 #endif
+/* the top level's packet rows (traverse_top_packet.h) in the ISA's vectors */
+#if SC_X86_AVX512
+#define SC_TOP_VP f32x16
+#else
+#define SC_TOP_VP f32x8
+#endif
 #include "traverse_bvh8_single.h"
+#undef SC_TOP_VP
 
 /* Packets of 8 rays in ymm registers, and on AVX-512 of 16 in zmm. */
 #define VP f32x8

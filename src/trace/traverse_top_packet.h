@@ -40,6 +40,7 @@ typedef struct top_pk {
     float rd[3][16] __attribute__((aligned(64)));
     float Ek[3][16] __attribute__((aligned(64)));
     int32_t neg[3][16] __attribute__((aligned(64)));
+    uint32_t negm[3];                                /* the same as lane bits */
     float tcull[16] __attribute__((aligned(64)));   /* sc_top_tmax: how far boxes are tested */
     sc_hitrec best[16];                              /* closest */
     int32_t *occluded;                               /* any */
@@ -211,6 +212,51 @@ SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
 
 /* The grown-box test of sc_top_slab for every lane and child: mask[i] the
  * lanes (of L) that reach child i, dist[i] the nearest of their entries. */
+#ifdef SC_TOP_VP
+/* In the ISA's vectors (SC_TOP_VP: a simd_vec.h shape of 8 or 16 lanes),
+ * with the lane masks and the nearest entry from mask registers: GCC
+ * vectorises the portable form's box test but not its per-lane gathering
+ * of the masks, whose branches were half of the top level's time. The
+ * same operations in the same order, so the same bits. */
+#define TCAT_(a, b) a##_##b
+#define TCAT(a, b) TCAT_(a, b)
+#define TV(op) TCAT(SC_TOP_VP, op)
+SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, uint32_t L, uint32_t mask[SC_BVH_N],
+                                    float dist[SC_BVH_N])
+{
+    enum { VW = TV(N) };
+    const TV(t) down = TV(set1)(1.0f - 0x1p-21f), up = TV(set1)(1.0f + 0x1p-21f), eps = TV(set1)(0x1p-122f);
+    const TV(t) inf = TV(set1)(INFINITY);
+    for (int i = 0; i < SC_BVH_N; i++) {
+        uint32_t m = 0;
+        float dmin = INFINITY;
+        for (unsigned h = 0; h < 16; h += VW) {
+            TV(t) a = TV(load)(P->tmin + h), b = TV(load)(P->tcull + h);
+            for (int k = 0; k < 3; k++) {
+                const TV(t) bl = TV(set1)(node->b[2 * k][i]), bh = TV(set1)(node->b[2 * k + 1][i]);
+                const TV(m) ng = TV(mask_from_bits)(P->negm[k] >> h);
+                const TV(t) nr = TV(sel)(ng, bh, bl), fr = TV(sel)(ng, bl, bh);
+                const TV(t) o = TV(load)(P->o[k] + h), rd = TV(load)(P->rd[k] + h), e = TV(load)(P->Ek[k] + h);
+                /* max/min return the second operand for a NaN: the bound stays */
+                a = TV(max)(TV(sub)(TV(mul)(TV(sub)(nr, o), rd), e), a);
+                b = TV(min)(TV(add)(TV(mul)(TV(sub)(fr, o), rd), e), b);
+            }
+            const TV(t) lo = TV(sub)(TV(mul)(a, down), eps);
+            const uint32_t hm = TV(bits)(TV(le)(lo, TV(add)(TV(mul)(b, up), eps))) & (L >> h) & ((1u << VW) - 1);
+            if (hm) {
+                m |= hm << h;
+                const float d = TV(hmin)(TV(sel)(TV(mask_from_bits)(hm), lo, inf));
+                dmin = d < dmin ? d : dmin;
+            }
+        }
+        mask[i] = m;
+        dist[i] = dmin;
+    }
+}
+#undef TV
+#undef TCAT
+#undef TCAT_
+#else
 SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, uint32_t L, uint32_t mask[SC_BVH_N],
                                     float dist[SC_BVH_N])
 {
@@ -243,6 +289,7 @@ SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, u
         dist[i] = dmin;
     }
 }
+#endif
 
 /* Lanes `lanes` (checked rays) of a W-lane packet (rows as
  * sc_trace_packet_lanes) through the top level; out as there (closest: the
@@ -302,6 +349,11 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             P.neg[k][l] = signbit(P.d[k][l]) != 0;
         }
         P.tcull[l] = P.tmax[l];
+    }
+    for (int k = 0; k < 3; k++) {
+        P.negm[k] = 0;
+        for (int l = 0; l < 16; l++)
+            P.negm[k] |= (uint32_t)P.neg[k][l] << l;
     }
     /* Each node pushes at most its 8 children, as in the single-ray walk,
      * so the single-ray stack bound holds. */
