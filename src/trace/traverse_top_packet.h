@@ -335,6 +335,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         goto done;
     }
     /* sc_top_grow and sc_top_ray_setup, lane by lane */
+    P.negm[0] = P.negm[1] = P.negm[2] = 0;
     for (int l = 0; l < 16; l++) {
         double m = 0;
         for (int k = 0; k < 3; k++) {
@@ -347,13 +348,9 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             P.rd[k][l] = 1.0f / P.d[k][l];
             P.Ek[k][l] = sc_top_ek(E, P.rd[k][l]);
             P.neg[k][l] = signbit(P.d[k][l]) != 0;
+            P.negm[k] |= (uint32_t)P.neg[k][l] << l;
         }
         P.tcull[l] = P.tmax[l];
-    }
-    for (int k = 0; k < 3; k++) {
-        P.negm[k] = 0;
-        for (int l = 0; l < 16; l++)
-            P.negm[k] |= (uint32_t)P.neg[k][l] << l;
     }
     /* Each node pushes at most its 8 children, as in the single-ray walk,
      * so the single-ray stack bound holds. */
