@@ -32,6 +32,7 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "bvh/bvh_internal.h"
 #include "common/sc_rng.h"
 #include "compare/crossing.h"
 #include "compare/oracle.h"
@@ -447,23 +448,32 @@ static void run_mesh(const char *name, const mesh *mm, size_t nrays, uint64_t se
     for (int isa = SC_ISA_SCALAR; isa < SC_ISA_COUNT; isa++) {
         if (!sc_isa_supported((sc_isa)isa))
             continue;
-        for (int pm = 0; pm < SC_PREFILTER_MODE_COUNT; pm++)
+        /* the medium build with every prefilter mode; the high build (its
+         * spatial splits give triangles' parts boxes of their own) with
+         * spheres off and with the compact summary */
+        for (int pm = 0; pm < SC_PREFILTER_MODE_COUNT + 2; pm++)
             for (size_t li = 0; li < 3; li++) {
                 sc_bvh_config cfg;
                 sc_bvh_config_default(&cfg);
                 assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
-                cfg.prefilter = (sc_prefilter_mode)pm;
+                cfg.prefilter = pm < SC_PREFILTER_MODE_COUNT ? (sc_prefilter_mode)pm
+                                : pm == SC_PREFILTER_MODE_COUNT ? SC_PREFILTER_OFF : SC_PREFILTER_COMPACT;
+                if (pm >= SC_PREFILTER_MODE_COUNT)
+                    cfg.quality = SC_BUILD_QUALITY_HIGH;
                 cfg.leaf_size = leaves[li];
                 sc_bvh *bvh;
                 assert_int_equal(sc_bvh_build(&m, &cfg, &bvh),
                                  SC_OK);
                 tally tl;
                 score(bvh, &set, NULL, &o, bt, &tl);
-                if (configs++ == 0 || tl.holes || tl.any_holes || tl.not_brute)
-                    print_message("%s (%zu tris, %zu rays) isa %d %s leaf %d: crossing vertex/edge rays %zu, "
+                if (configs++ == 0 || tl.holes || tl.any_holes || tl.not_brute ||
+                    (pm == SC_PREFILTER_MODE_COUNT && li == 0 && isa == SC_ISA_SCALAR))
+                    print_message("%s (%zu tris in %zu leaf slots, %zu rays) isa %d %s%s leaf %d: crossing vertex/edge rays %zu, "
                                   "holes %zu (any-hit %zu); touching rays %zu, grazes missed %zu; "
                                   "old definition %zu; traversal != brute %zu\n",
-                                  name, m.triangle_count, set.count, isa, sc_prefilter_mode_name(cfg.prefilter),
+                                  name, m.triangle_count, bvh->references, set.count, isa,
+                                  sc_prefilter_mode_name(cfg.prefilter),
+                                  cfg.quality == SC_BUILD_QUALITY_HIGH ? " high" : "",
                                   cfg.leaf_size, tl.hole_rays, tl.holes, tl.any_holes, tl.graze_rays,
                                   tl.grazes_missed, tl.old_holes, tl.not_brute);
                 assert_true(tl.hole_rays > set.count / 3);     /* not vacuous */
@@ -533,6 +543,75 @@ static void test_grid_box(void **state)
     mesh_free(&m);
 }
 
+/* A small torus in a box of 12 large triangles (and through its faces): the high
+ * build's spatial splits cut the box's triangles (checked), so rays at
+ * their vertices and edges cross leaves whose boxes hold only parts of
+ * them. */
+static void test_torus_in_box(void **state)
+{
+    (void)state;
+    mesh box, tor, m;
+    grid_box(&box, 1, 0);
+    double centre[3] = { 0.65, 0.35, 0.5 };     /* the box's centre, placed as grid_box places it */
+    const double off[3] = { 0.9, 0.1, -2.3 };
+    place(centre, off, 1.0);
+    torus(&tor, 48, 24, centre, 0.3);
+    m.nv = box.nv + tor.nv, m.nt = box.nt + tor.nt;
+    m.pos = malloc(3 * (size_t)m.nv * sizeof *m.pos);
+    m.idx = malloc(3 * (size_t)m.nt * sizeof *m.idx);
+    assert_non_null(m.pos);
+    assert_non_null(m.idx);
+    memcpy(m.pos, box.pos, 3 * (size_t)box.nv * sizeof *m.pos);
+    memcpy(m.pos + 3 * (size_t)box.nv, tor.pos, 3 * (size_t)tor.nv * sizeof *m.pos);
+    memcpy(m.idx, box.idx, 3 * (size_t)box.nt * sizeof *m.idx);
+    for (size_t i = 0; i < 3 * (size_t)tor.nt; i++)
+        m.idx[3 * (size_t)box.nt + i] = tor.idx[i] + box.nv;
+    sc_mesh_view mv = { m.pos, m.nv, m.idx, m.nt, 0, 0 };
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.quality = SC_BUILD_QUALITY_HIGH;
+    cfg.leaf_size = 1;
+    sc_bvh *bvh, *med;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &bvh), SC_OK);
+    assert_true(bvh->references > bvh->triangles);     /* not vacuous: triangles were cut */
+    /* Rays at random points of the box's triangles, from all sides: the
+     * cut parts' boxes must together cover each whole triangle, so the
+     * closest hit is the medium tree's (which cuts nothing). A part's box
+     * shrunk by 0.1 % of its width toward the plane fails here. */
+    cfg.quality = SC_BUILD_QUALITY_MEDIUM;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &med), SC_OK);
+    sc_rng g;
+    sc_rng_seed(&g, 8);
+    size_t differ = 0;
+    for (int i = 0; i < 200000; i++) {
+        const uint32_t *tri = &m.idx[3 * (sc_rng_next(&g) % box.nt)];
+        double u = sc_rng_uniform(&g), v = sc_rng_uniform(&g);
+        if (u + v > 1)
+            u = 1 - u, v = 1 - v;
+        double p[3], d[3], n2 = 0;
+        for (int k = 0; k < 3; k++) {
+            const double a = m.pos[3 * tri[0] + k], b = m.pos[3 * tri[1] + k], c = m.pos[3 * tri[2] + k];
+            p[k] = a + u * (b - a) + v * (c - a);
+            d[k] = sc_rng_range(&g, -1, 1);
+            n2 += d[k] * d[k];
+        }
+        sc_ray ray = { .tmin = 0, .tmax = INFINITY };
+        for (int k = 0; k < 3; k++) {
+            ray.dir[k] = (float)(d[k] / sqrt(n2));
+            ray.org[k] = (float)(p[k] - 3 * ray.dir[k]);
+        }
+        sc_hitrec hh, hm;
+        assert_int_equal(sc_trace_closest(bvh, &ray, &hh, NULL), SC_OK);
+        assert_int_equal(sc_trace_closest(med, &ray, &hm, NULL), SC_OK);
+        differ += hh.prim != hm.prim || memcmp(&hh.t, &hm.t, sizeof hh.t) != 0;
+    }
+    assert_int_equal(differ, 0);
+    sc_bvh_free(med);
+    sc_bvh_free(bvh);
+    run_mesh("torus in a box", &m, 6000, 7);
+    mesh_free(&box), mesh_free(&tor), mesh_free(&m);
+}
+
 /* ---- the shared scenes ----------------------------------------------------- */
 
 /* The rays `spherecull compare --rays adversarial` checks with its default
@@ -600,6 +679,7 @@ int main(void)
         cmocka_unit_test(test_torus_scales),
         cmocka_unit_test(test_bumpy_sphere),
         cmocka_unit_test(test_grid_box),
+        cmocka_unit_test(test_torus_in_box),
         cmocka_unit_test(test_shared_scenes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -3,6 +3,8 @@
 sc_add_test(test_bvh SOURCES test_bvh.c
             ENV SC_TEST_SCENES=${PROJECT_SOURCE_DIR}/../shared/scenes FTZ)
 sc_add_test(test_bvh_watertight SOURCES test_bvh_watertight.c FTZ)
+# The high quality's triangle cut (src/bvh/split_triangle.h) against MPFR.
+sc_add_test(test_split_triangle SOURCES test_split_triangle.c FTZ)
 
 # Prefilter modes never change an answer, on every shipped and shared scene.
 if(TARGET spherecull_scene)

@@ -87,10 +87,7 @@ static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axi
 static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
 
 #define MAX_BINS SC_SAH_MAX_BINS
-/* Below this depth SAH splits may be arbitrarily unbalanced; from it on the
- * builder splits at the object median, so that at most 31 more levels follow
- * and the binary depth stays below SC_BVH_MAX_DEPTH. */
-#define MEDIAN_DEPTH 32
+#define MEDIAN_DEPTH SC_SAH_MEDIAN_DEPTH
 
 struct subtree_job;
 

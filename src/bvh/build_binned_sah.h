@@ -8,6 +8,10 @@
 #include "box3.h"
 
 #define SC_SAH_MAX_BINS 64
+/* Below this depth SAH splits may be arbitrarily unbalanced; from it on a
+ * builder splits at the object median, so that at most 31 more levels follow
+ * and the binary depth stays below SC_BVH_MAX_DEPTH. */
+#define SC_SAH_MEDIAN_DEPTH 32
 
 /* A binary node: inner (a, b = children) or leaf (a = first index into the
  * id array, b = count). */

@@ -12,6 +12,8 @@
 #include <unistd.h>
 
 #include "build_internal.h"
+#include "build_spatial_sah.h"
+#include "split_triangle.h"
 #include "optimize_reinsertion.h"
 #include "common/sc_clock.h"
 #include "common/sc_mem.h"
@@ -90,6 +92,15 @@ static void *box_work(void *arg)
         if (bad)
             atomic_fetch_add(j->skipped, bad);
     }
+}
+
+/* sc_split_fn over the build's triangles (ctx: the bvh_builder). */
+static void split_triangle(const void *ctx, uint32_t id, const box3 *box, int axis, float pos, box3 *left,
+                           box3 *right)
+{
+    const bvh_builder *B = ctx;
+    const float *v[3] = { vtx(B, id, 0), vtx(B, id, 1), vtx(B, id, 2) };
+    sc_split_triangle(v, box, axis, pos, left, right);
 }
 
 sc_status sc_bvh_build(const sc_mesh_view *mesh, const sc_bvh_config *cfg_in, sc_bvh **out)
@@ -203,13 +214,36 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     if (used) {
         const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost, threads };
         size_t bn_count;
-        uint32_t root = sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
+        uint32_t root = 0;
+        if (cfg.quality == SC_BUILD_QUALITY_HIGH) {
+            /* Embree's choices: a spatial split tried where the object
+             * split's children overlap by 1e-5 of the root's area and a
+             * tenth of the node's, 16 spatial bins, at most 20 % more
+             * references (the budgets measured: docs/compare.md). */
+            const sc_spatial_params sp = { sah, 1e-5f, 0.1f, 0.2f, 16, split_triangle, &B };
+            uint32_t *sids;
+            sc_bnode *snodes;
+            size_t refs;
+            if (sc_build_spatial_sah(pbox, ids, used, &sp, &sids, &refs, &snodes, &bn_count) != 0)
+                goto fail;
+            free(ids), free(bn), free(B.auto_use);
+            ids = sids, bn = snodes;
+            bvh->references = refs;
+            B.ids = ids, B.bn = bn;
+            B.auto_use = calloc(bn_count, 1);
+            if (!B.auto_use)
+                goto fail;
+        } else {
+            root = sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
+            bvh->references = used;
+        }
         if (cfg.quality == SC_BUILD_QUALITY_HIGH) {
             /* Up to 10 rounds over the 20 % largest nodes: on Sponza and a CAD
-             * engine the SAH cost stops falling there (12 % and 6 % below
-             * medium), at about 1.7x the build time (docs/compare.md). */
+             * engine the SAH cost of a binned SAH tree stops falling there
+             * (12 % and 6 % lower), at about 1.7x its build time
+             * (docs/compare.md). */
             const sc_reinsertion_params rp = { 10, 0.2, threads };
-            if (sc_reinsertion_optimize(bn, root, 2 * used - 1, &rp) != 0)
+            if (sc_reinsertion_optimize(bn, root, bn_count, &rp) != 0)
                 goto fail;
         }
         B.root_area = box_area(&B.bn[root].box);

@@ -19,6 +19,8 @@ struct sc_bvh {
     float root_lo[3], root_hi[3];
     size_t node_count, leaf_count, leaf_bytes, sphere_bytes, leaves_with_spheres;
     size_t triangles, skipped;
+    size_t references;           /* triangles in the leaves, counted once per leaf: more than
+                                    triangles where the high quality's spatial splits cut some */
     int depth;
     double sah_cost, build_seconds;
     double built_sah_cost;       /* sah_cost when built; a refit changes sah_cost only */
