@@ -84,8 +84,8 @@ typedef enum sc_build_quality {
     SC_BUILD_QUALITY_HIGH,        /* SAH with spatial splits (Stich et al. 2009: large triangles cut
                                      into parts, each in its own leaf, at most 20 % more leaf
                                      slots), then reinsertion (Bittner et al. 2013: the inner nodes
-                                     rearranged for a lower SAH cost); a longer build, on one
-                                     thread for the first step; the same hits as medium */
+                                     rearranged for a lower SAH cost); a longer build; the
+                                     same hits as medium */
     SC_BUILD_QUALITY_COUNT
 } sc_build_quality;
 

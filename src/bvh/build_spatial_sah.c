@@ -11,13 +11,16 @@
  * children in proportion to their sizes, so the budget is spent all over
  * the tree and not on whichever subtree is built first. A straddling
  * reference goes to one side only when that costs less than cutting it
- * (reference unsplitting). One thread: the high quality's build time is
- * the price of its tree (docs/compare.md). */
+ * (reference unsplitting). The top levels are built on the calling
+ * thread; the subtrees below them, each into its own range of the arrays,
+ * on the build's threads. */
 #include <float.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "build_internal.h"
 #include "build_spatial_sah.h"
 
 #define MAX_BINS SC_SAH_MAX_BINS
@@ -27,14 +30,44 @@ typedef struct ref {
     uint32_t id;
 } ref;
 
+/* A subtree of fewer than JOB_MAX references below the top levels: built
+ * by whichever thread takes it, into its own range of the node and id
+ * arrays (room for its references and its whole budget of duplicates). */
+#define JOB_MAX SC_SAH_PARALLEL_MIN
+typedef struct sp_job {
+    ref *r;
+    size_t n, extra;
+    int owned, depth;
+    uint32_t me;             /* its root's slot, in the top levels */
+    size_t node_off, id_off, used;
+} sp_job;
+
 typedef struct sp_builder {
     const sc_spatial_params *p;
     float root_area;
     uint32_t *ids;
-    size_t nids, ids_cap;
+    size_t nids;
     sc_bnode *nodes;
-    size_t nnodes, nodes_cap;
+    size_t nnodes;
+    /* the top levels (a tree of JOB_MAX references or more): subtrees of
+     * fewer are recorded as jobs, and the arrays this walk would free wait
+     * until the jobs that read them are done */
+    int record;
+    sp_job *jobs;
+    size_t njobs;
+    ref **deferred;
+    size_t ndeferred;
 } sp_builder;
+
+static void release(sp_builder *S, ref *r, int owned)
+{
+    if (!owned)
+        return;
+    if (S->record)
+        S->deferred[S->ndeferred++] = r;
+    else
+        free(r);
+}
 
 typedef struct split {
     float cost;
@@ -293,6 +326,10 @@ static void select_median(ref *r, size_t n, size_t mid, int axis)
 static void sp_build(sp_builder *S, ref *r, size_t n, int owned, size_t extra, uint32_t me, int depth)
 {
     const sc_sah_params *sah = &S->p->sah;
+    if (S->record && n < JOB_MAX) {
+        S->jobs[S->njobs++] = (sp_job){ .r = r, .n = n, .extra = extra, .owned = owned, .depth = depth, .me = me };
+        return;
+    }
     box3 bounds, cb;
     range_bounds(r, n, &bounds, &cb);
     sc_bnode *node = &S->nodes[me];
@@ -314,8 +351,7 @@ static void sp_build(sp_builder *S, ref *r, size_t n, int owned, size_t extra, u
         node->leaf = 1, node->a = (uint32_t)S->nids, node->b = (uint32_t)n;
         for (size_t i = 0; i < n; i++)
             S->ids[S->nids++] = r[i].id;
-        if (owned)
-            free(r);
+        release(S, r, owned);
         return;
     }
     const uint32_t lc = (uint32_t)S->nnodes, rc = lc + 1;
@@ -327,8 +363,7 @@ static void sp_build(sp_builder *S, ref *r, size_t n, int owned, size_t extra, u
         size_t nl, nr;
         if (spatial_partition(S, r, n, &sp, &L, &nl, &R, &nr) == 0) {
             if (nl > 0 && nr > 0 && nl < n && nr < n && nl + nr - n <= extra) {
-                if (owned)
-                    free(r);
+                release(S, r, owned);
                 const size_t rem = extra - (nl + nr - n);
                 const size_t el = (size_t)((double)rem * (double)nl / (double)(nl + nr));
                 sp_build(S, L, nl, 1, el, lc, depth + 1);
@@ -364,22 +399,50 @@ static void sp_build(sp_builder *S, ref *r, size_t n, int owned, size_t extra, u
     const size_t el = (size_t)((double)extra * (double)mid / (double)n);
     sp_build(S, r, mid, 0, el, lc, depth + 1);
     sp_build(S, r + mid, n - mid, 0, extra - el, rc, depth + 1);
-    if (owned)
-        free(r);
+    release(S, r, owned);
+}
+
+typedef struct job_queue {
+    const sp_builder *top;
+    sp_job *jobs;
+    size_t njobs;
+    atomic_size_t next;
+} job_queue;
+
+static void *job_work(void *arg)
+{
+    job_queue *q = arg;
+    for (;;) {
+        const size_t k = atomic_fetch_add(&q->next, 1);
+        if (k >= q->njobs)
+            return NULL;
+        sp_job *j = &q->jobs[k];
+        sp_builder L = { .p = q->top->p, .root_area = q->top->root_area, .ids = q->top->ids, .nids = j->id_off,
+                         .nodes = q->top->nodes, .nnodes = j->node_off };
+        sp_build(&L, j->r, j->n, j->owned, j->extra, j->me, j->depth);
+        j->used = L.nids - j->id_off;
+    }
 }
 
 int sc_build_spatial_sah(const box3 *boxes, const uint32_t *ids, size_t n, const sc_spatial_params *p,
                          uint32_t **ids_out, size_t *refs_out, sc_bnode **nodes_out, size_t *node_count)
 {
     *ids_out = NULL, *nodes_out = NULL, *refs_out = *node_count = 0;
-    const size_t extra = (size_t)((double)p->budget * (double)n);
-    sp_builder S = { .p = p, .ids_cap = n + extra };
-    S.nodes_cap = 2 * S.ids_cap - 1;
+    const size_t extra = (size_t)((double)p->budget * (double)n), cap = n + extra;
+    /* A level of the top holds at most cap / JOB_MAX nodes of JOB_MAX
+     * references or more, and there are at most SC_SAH_MEDIAN_DEPTH + 32
+     * levels; each such node records at most two jobs. */
+    const size_t top_max = (cap / JOB_MAX + 1) * (SC_SAH_MEDIAN_DEPTH + 33);
+    sp_builder S = { .p = p, .record = n >= JOB_MAX };
     ref *r = malloc(sizeof(ref) * n);
-    S.ids = malloc(sizeof(uint32_t) * S.ids_cap);
-    S.nodes = malloc(sizeof(sc_bnode) * S.nodes_cap);
-    if (!r || !S.ids || !S.nodes) {
-        free(r), free(S.ids), free(S.nodes);
+    S.ids = malloc(sizeof(uint32_t) * cap);
+    S.nodes = malloc(sizeof(sc_bnode) * (2 * cap - 1));
+    if (S.record) {
+        S.jobs = malloc(sizeof(sp_job) * 2 * top_max);
+        S.deferred = malloc(sizeof(ref *) * top_max);
+    }
+    if (!r || !S.ids || !S.nodes || (S.record && (!S.jobs || !S.deferred))) {
+        free(r), free(S.ids), free(S.nodes), free(S.jobs), free(S.deferred);
         return -1;
     }
     box3 all;
@@ -391,7 +454,29 @@ int sc_build_spatial_sah(const box3 *boxes, const uint32_t *ids, size_t n, const
     S.root_area = box_area(&all);
     S.nnodes = 1;
     sp_build(&S, r, n, 1, extra, 0, 0);
-    *ids_out = S.ids, *refs_out = S.nids;
+    size_t refs = S.nids;
+    if (S.record) {
+        /* Each job's range, in the order the top-level walk recorded them:
+         * its references and all its budget, its nodes but the root (in
+         * its slot above). The ranges and so the tree do not depend on
+         * which thread builds which job, nor on how many threads there are. */
+        size_t node_off = S.nnodes, id_off = 0;
+        for (size_t k = 0; k < S.njobs; k++) {
+            sp_job *j = &S.jobs[k];
+            j->node_off = node_off, j->id_off = id_off;
+            node_off += 2 * (j->n + j->extra) - 2;
+            id_off += j->n + j->extra;
+        }
+        job_queue q = { &S, S.jobs, S.njobs, 0 };
+        sc_build_run_workers(job_work, &q, p->sah.threads < 1 ? 1 : p->sah.threads, S.njobs);
+        for (size_t k = 0; k < S.njobs; k++)
+            refs += S.jobs[k].used;
+        for (size_t k = 0; k < S.ndeferred; k++)
+            free(S.deferred[k]);
+        free(S.jobs), free(S.deferred);
+        S.nnodes = node_off;
+    }
+    *ids_out = S.ids, *refs_out = refs;
     *nodes_out = S.nodes, *node_count = S.nnodes;
     return 0;
 }
