@@ -112,6 +112,37 @@ static int obj_bin(const ref *r, int axis, float lo, float scale, int nb)
     return clamp_bin((int)((centre_of(&r->box, axis) - lo) * scale), nb);
 }
 
+/* The best split after bin j of one axis's nb bins (into best, if it
+ * costs less): enter[k] references start in bin k and leave[k] end in it
+ * (both the counts for an object split), the sides' boxes grow over the
+ * bins; a side may be neither empty nor everything, and the sides may
+ * together hold at most max_dups references more than n. Spatial splits
+ * name their plane pos[j + 1]. */
+static void sweep(const box3 *bin, const size_t *enter, const size_t *leave, int nb, size_t n, size_t max_dups,
+                  int axis, const float *pos, split *best)
+{
+    box3 rbox[MAX_BINS], acc;
+    size_t rcnt[MAX_BINS], c = 0;
+    box_empty(&acc);
+    for (int j = nb - 1; j > 0; j--) {
+        box_grow(&acc, &bin[j]);
+        c += leave[j];
+        rbox[j] = acc, rcnt[j] = c;
+    }
+    box_empty(&acc);
+    c = 0;
+    for (int j = 0; j < nb - 1; j++) {
+        box_grow(&acc, &bin[j]);
+        c += enter[j];
+        const size_t cr = rcnt[j + 1];
+        if (c == 0 || cr == 0 || c >= n || cr >= n || c + cr - n > max_dups)
+            continue;
+        const float cost = box_area(&acc) * leaf_blocks(c) + box_area(&rbox[j + 1]) * leaf_blocks(cr);
+        if (cost < best->cost)
+            *best = (split){ cost, axis, j, pos ? pos[j + 1] : 0, acc, rbox[j + 1], c, cr };
+    }
+}
+
 /* The best binned object split (centres in nb bins per axis). */
 static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *best)
 {
@@ -120,8 +151,8 @@ static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *
         if (!(ext > 0))
             continue;
         const float scale = (float)nb * (1 - 0x1p-20f) / ext;
-        box3 bin[MAX_BINS], rbox[MAX_BINS];
-        size_t cnt[MAX_BINS] = { 0 }, rcnt[MAX_BINS];
+        box3 bin[MAX_BINS];
+        size_t cnt[MAX_BINS] = { 0 };
         for (int k = 0; k < nb; k++)
             box_empty(&bin[k]);
         for (size_t i = 0; i < n; i++) {
@@ -129,25 +160,7 @@ static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *
             box_grow(&bin[k], &r[i].box);
             cnt[k]++;
         }
-        box3 acc;
-        box_empty(&acc);
-        size_t c = 0;
-        for (int j = nb - 1; j > 0; j--) {
-            box_grow(&acc, &bin[j]);
-            c += cnt[j];
-            rbox[j] = acc, rcnt[j] = c;
-        }
-        box_empty(&acc);
-        c = 0;
-        for (int j = 0; j < nb - 1; j++) {
-            box_grow(&acc, &bin[j]);
-            c += cnt[j];
-            if (c == 0 || rcnt[j + 1] == 0)
-                continue;
-            const float cost = box_area(&acc) * leaf_blocks(c) + box_area(&rbox[j + 1]) * leaf_blocks(rcnt[j + 1]);
-            if (cost < best->cost)
-                *best = (split){ cost, axis, j, 0, acc, rbox[j + 1], c, rcnt[j + 1] };
-        }
+        sweep(bin, cnt, cnt, nb, n, 0, axis, NULL, best);
     }
 }
 
@@ -190,8 +203,8 @@ static void spatial_split(const ref *r, size_t n, const box3 *bounds, int nb, si
         }
         pos[nb] = bounds->hi[axis];
         const float scale = (float)nb / ext;
-        box3 bin[MAX_BINS], rbox[MAX_BINS];
-        size_t in[MAX_BINS] = { 0 }, out[MAX_BINS] = { 0 }, rcnt[MAX_BINS];
+        box3 bin[MAX_BINS];
+        size_t in[MAX_BINS] = { 0 }, out[MAX_BINS] = { 0 };
         for (int k = 0; k < nb; k++)
             box_empty(&bin[k]);
         for (size_t i = 0; i < n; i++) {
@@ -207,26 +220,7 @@ static void spatial_split(const ref *r, size_t n, const box3 *bounds, int nb, si
             }
             in[f]++, out[l]++;
         }
-        box3 acc;
-        box_empty(&acc);
-        size_t c = 0;
-        for (int j = nb - 1; j > 0; j--) {
-            box_grow(&acc, &bin[j]);
-            c += out[j];
-            rbox[j] = acc, rcnt[j] = c;
-        }
-        box_empty(&acc);
-        c = 0;
-        for (int j = 0; j < nb - 1; j++) {
-            box_grow(&acc, &bin[j]);
-            c += in[j];
-            const size_t cr = rcnt[j + 1];
-            if (c == 0 || cr == 0 || c >= n || cr >= n || c + cr - n > extra)
-                continue;
-            const float cost = box_area(&acc) * leaf_blocks(c) + box_area(&rbox[j + 1]) * leaf_blocks(cr);
-            if (cost < best->cost)
-                *best = (split){ cost, axis, j, pos[j + 1], acc, rbox[j + 1], c, cr };
-        }
+        sweep(bin, in, out, nb, n, extra, axis, pos, best);
     }
 }
 
