@@ -340,8 +340,8 @@ static void sp_build(sp_builder *S, ref *r, size_t n, int owned, size_t extra, u
             sp.cost = INFINITY, sp.axis = -1;
     }
     const float area = box_area(&bounds);
-    const float best = obj.cost < sp.cost ? obj.cost : sp.cost;
-    if (n <= 1 || (n <= (size_t)sah->max_leaf && (obj.axis < 0 && sp.axis < 0 ? 1 : area * leaf_blocks(n) <= sah->traversal_cost * area + best))) {
+    const float best = obj.cost < sp.cost ? obj.cost : sp.cost;   /* INFINITY: no split found */
+    if (n <= 1 || (n <= (size_t)sah->max_leaf && area * leaf_blocks(n) <= sah->traversal_cost * area + best)) {
         node->leaf = 1, node->a = (uint32_t)S->nids, node->b = (uint32_t)n;
         for (size_t i = 0; i < n; i++)
             S->ids[S->nids++] = r[i].id;
