@@ -13,73 +13,7 @@
 #include "box3.h"
 #include "build_binned_sah.h"
 #include "build_internal.h"
-
-/* A box in four lanes (x, y, z, unused) for the inner loops: two min/max
- * instead of six compares per grow. vbox_grow is box_grow's compare lane
- * for lane ((v)minps(a, b) = a < b ? a : b), so the tree has the same bits
- * on the SSE2 path and the portable one. */
-#if defined(__SSE2__)
-#include <emmintrin.h>
-typedef struct vbox { __m128 lo, hi; } vbox;
-static inline vbox vbox_empty(void) { return (vbox){ _mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY) }; }
-/* lanes lo0 lo1 lo2 hi0 and lo2 hi0 hi1 hi2: two loads inside the box */
-static inline vbox vbox_load(const box3 *b)
-{
-    const __m128 t = _mm_loadu_ps(&b->lo[2]);
-    return (vbox){ _mm_loadu_ps(b->lo), _mm_shuffle_ps(t, t, _MM_SHUFFLE(3, 3, 2, 1)) };
-}
-static inline void vbox_grow(vbox *b, vbox o) { b->lo = _mm_min_ps(o.lo, b->lo), b->hi = _mm_max_ps(o.hi, b->hi); }
-static inline void vbox_grow_point(vbox *b, __m128 p) { b->lo = _mm_min_ps(p, b->lo), b->hi = _mm_max_ps(p, b->hi); }
-static inline __m128 vbox_centre(vbox b)
-{
-    return _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0.5f), b.lo), _mm_mul_ps(_mm_set1_ps(0.5f), b.hi));
-}
-static inline box3 vbox_box(vbox b)
-{
-    float lo[4], hi[4];
-    _mm_storeu_ps(lo, b.lo), _mm_storeu_ps(hi, b.hi);
-    return (box3){ { lo[0], lo[1], lo[2] }, { hi[0], hi[1], hi[2] } };
-}
-/* box_area's bits: (v)maxps(d, 0) is its d > 0 ? d : 0 */
-static inline float vbox_area(vbox b)
-{
-    float d[4];
-    _mm_storeu_ps(d, _mm_max_ps(_mm_sub_ps(b.hi, b.lo), _mm_setzero_ps()));
-    return 2 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
-}
-/* the bin of centre c on each axis, before clamping */
-static inline void vbin(__m128 c, __m128 lo, __m128 scale, int k[4])
-{
-    _mm_storeu_si128((__m128i *)(void *)k, _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, lo), scale)));
-}
-static inline __m128 v3(const float *p) { return _mm_setr_ps(p[0], p[1], p[2], 0); }
-#else
-typedef struct vbox { box3 b; } vbox;
-typedef struct { float v[3]; } v3f;
-static inline vbox vbox_empty(void) { vbox b; box_empty(&b.b); return b; }
-static inline vbox vbox_load(const box3 *b) { return (vbox){ *b }; }
-static inline void vbox_grow(vbox *b, vbox o) { box_grow(&b->b, &o.b); }
-static inline void vbox_grow_point(vbox *b, v3f p)
-{
-    box3 c = { { p.v[0], p.v[1], p.v[2] }, { p.v[0], p.v[1], p.v[2] } };
-    box_grow(&b->b, &c);
-}
-static inline v3f vbox_centre(vbox b)
-{
-    v3f c;
-    for (int k = 0; k < 3; k++)
-        c.v[k] = 0.5f * b.b.lo[k] + 0.5f * b.b.hi[k];
-    return c;
-}
-static inline box3 vbox_box(vbox b) { return b.b; }
-static inline float vbox_area(vbox b) { return box_area(&b.b); }
-static inline void vbin(v3f c, v3f lo, v3f scale, int k[4])
-{
-    for (int a = 0; a < 3; a++)
-        k[a] = (int)((c.v[a] - lo.v[a]) * scale.v[a]);
-}
-static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
-#endif
+#include "vbox.h"
 
 /* A primitive's centre on one axis: the bits of vbox_centre's lane. */
 static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }

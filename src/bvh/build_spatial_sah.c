@@ -22,6 +22,7 @@
 
 #include "build_internal.h"
 #include "build_spatial_sah.h"
+#include "vbox.h"
 
 #define MAX_BINS SC_SAH_MAX_BINS
 
@@ -98,13 +99,14 @@ static float overlap_area(const box3 *a, const box3 *b)
 
 static void range_bounds(const ref *r, size_t n, box3 *bounds, box3 *cb)
 {
-    box_empty(bounds);
-    box_empty(cb);
+    vbox b = vbox_empty(), c = vbox_empty();
     for (size_t i = 0; i < n; i++) {
-        box_grow(bounds, &r[i].box);
-        const float c[3] = { centre_of(&r[i].box, 0), centre_of(&r[i].box, 1), centre_of(&r[i].box, 2) };
-        box_grow_point(cb, c);
+        const vbox p = vbox_load(&r[i].box);
+        vbox_grow(&b, p);
+        vbox_grow_point(&c, vbox_centre(p));
     }
+    *bounds = vbox_box(b);
+    *cb = vbox_box(c);
 }
 
 static int obj_bin(const ref *r, int axis, float lo, float scale, int nb)
@@ -118,50 +120,58 @@ static int obj_bin(const ref *r, int axis, float lo, float scale, int nb)
  * bins; a side may be neither empty nor everything, and the sides may
  * together hold at most max_dups references more than n. Spatial splits
  * name their plane pos[j + 1]. */
-static void sweep(const box3 *bin, const size_t *enter, const size_t *leave, int nb, size_t n, size_t max_dups,
+static void sweep(const vbox *bin, const size_t *enter, const size_t *leave, int nb, size_t n, size_t max_dups,
                   int axis, const float *pos, split *best)
 {
-    box3 rbox[MAX_BINS], acc;
+    vbox rbox[MAX_BINS], acc = vbox_empty();
     size_t rcnt[MAX_BINS], c = 0;
-    box_empty(&acc);
     for (int j = nb - 1; j > 0; j--) {
-        box_grow(&acc, &bin[j]);
+        vbox_grow(&acc, bin[j]);
         c += leave[j];
         rbox[j] = acc, rcnt[j] = c;
     }
-    box_empty(&acc);
+    acc = vbox_empty();
     c = 0;
     for (int j = 0; j < nb - 1; j++) {
-        box_grow(&acc, &bin[j]);
+        vbox_grow(&acc, bin[j]);
         c += enter[j];
         const size_t cr = rcnt[j + 1];
         if (c == 0 || cr == 0 || c >= n || cr >= n || c + cr - n > max_dups)
             continue;
-        const float cost = box_area(&acc) * leaf_blocks(c) + box_area(&rbox[j + 1]) * leaf_blocks(cr);
+        const float cost = vbox_area(acc) * leaf_blocks(c) + vbox_area(rbox[j + 1]) * leaf_blocks(cr);
         if (cost < best->cost)
-            *best = (split){ cost, axis, j, pos ? pos[j + 1] : 0, acc, rbox[j + 1], c, cr };
+            *best = (split){ cost, axis, j, pos ? pos[j + 1] : 0, vbox_box(acc), vbox_box(rbox[j + 1]), c, cr };
     }
 }
 
-/* The best binned object split (centres in nb bins per axis). */
+/* The best binned object split (centres in nb bins per axis), the three
+ * axes binned in one pass. */
 static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *best)
 {
+    float scale[3];
     for (int axis = 0; axis < 3; axis++) {
         const float ext = cb->hi[axis] - cb->lo[axis];
-        if (!(ext > 0))
-            continue;
-        const float scale = (float)nb * (1 - 0x1p-20f) / ext;
-        box3 bin[MAX_BINS];
-        size_t cnt[MAX_BINS] = { 0 };
-        for (int k = 0; k < nb; k++)
-            box_empty(&bin[k]);
-        for (size_t i = 0; i < n; i++) {
-            const int k = obj_bin(&r[i], axis, cb->lo[axis], scale, nb);
-            box_grow(&bin[k], &r[i].box);
-            cnt[k]++;
-        }
-        sweep(bin, cnt, cnt, nb, n, 0, axis, NULL, best);
+        scale[axis] = ext > 0 ? (float)nb * (1 - 0x1p-20f) / ext : 0;
     }
+    vbox bin[3][MAX_BINS];
+    size_t cnt[3][MAX_BINS] = { { 0 } };
+    for (int axis = 0; axis < 3; axis++)
+        for (int k = 0; k < nb; k++)
+            bin[axis][k] = vbox_empty();
+    const __typeof__(v3(scale)) vlo = v3(cb->lo), vscale = v3(scale);
+    for (size_t i = 0; i < n; i++) {
+        const vbox p = vbox_load(&r[i].box);
+        int k[4];
+        vbin(vbox_centre(p), vlo, vscale, k);
+        for (int axis = 0; axis < 3; axis++) {
+            const int kk = clamp_bin(k[axis], nb);
+            vbox_grow(&bin[axis][kk], p);
+            cnt[axis][kk]++;
+        }
+    }
+    for (int axis = 0; axis < 3; axis++)
+        if (scale[axis] > 0)
+            sweep(bin[axis], cnt[axis], cnt[axis], nb, n, 0, axis, NULL, best);
 }
 
 /* The bins a coordinate interval [x0, x1] meets, pos[] the nb + 1 planes. */
@@ -203,20 +213,24 @@ static void spatial_split(const ref *r, size_t n, const box3 *bounds, int nb, si
         }
         pos[nb] = bounds->hi[axis];
         const float scale = (float)nb / ext;
-        box3 bin[MAX_BINS];
+        vbox bin[MAX_BINS];
         size_t in[MAX_BINS] = { 0 }, out[MAX_BINS] = { 0 };
         for (int k = 0; k < nb; k++)
-            box_empty(&bin[k]);
+            bin[k] = vbox_empty();
         for (size_t i = 0; i < n; i++) {
             int f, l;
             bin_span(pos, scale, nb, r[i].box.lo[axis], r[i].box.hi[axis], &f, &l);
-            for (int b = f; b <= l; b++) {
-                box3 part = r[i].box;
-                if (b > f)
-                    part.lo[axis] = pos[b];
-                if (b < l)
-                    part.hi[axis] = pos[b + 1];
-                box_grow(&bin[b], &part);
+            if (f == l) {
+                vbox_grow(&bin[f], vbox_load(&r[i].box));
+            } else {
+                for (int b = f; b <= l; b++) {
+                    box3 part = r[i].box;
+                    if (b > f)
+                        part.lo[axis] = pos[b];
+                    if (b < l)
+                        part.hi[axis] = pos[b + 1];
+                    vbox_grow(&bin[b], vbox_load(&part));
+                }
             }
             in[f]++, out[l]++;
         }
