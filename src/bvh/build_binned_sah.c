@@ -15,10 +15,6 @@
 #include "build_internal.h"
 #include "vbox.h"
 
-/* A primitive's centre on one axis: the bits of vbox_centre's lane. */
-static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
-
-static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
 
 #define MAX_BINS SC_SAH_MAX_BINS
 #define MEDIAN_DEPTH SC_SAH_MEDIAN_DEPTH

@@ -79,8 +79,6 @@ typedef struct split {
     size_t nl, nr;
 } split;
 
-static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
-static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
 static inline int box_ok(const box3 *b)
 {
     return b->lo[0] <= b->hi[0] && b->lo[1] <= b->hi[1] && b->lo[2] <= b->hi[2];

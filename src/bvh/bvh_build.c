@@ -177,12 +177,10 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     size_t n = triangle_count;
     box3 *pbox = malloc(sizeof(box3) * (n ? n : 1));
     uint32_t *ids = malloc(sizeof(uint32_t) * (n ? n : 1));
-    sc_bnode *bn = malloc(sizeof(sc_bnode) * (2 * n + 1));
-    B.auto_use = calloc(2 * n + 1, 1);
+    sc_bnode *bn = NULL;         /* the binary tree: the SAH step's */
     B.ids = ids;
-    B.bn = bn;
     st = SC_ERR_OUT_OF_MEMORY;
-    if (!bvh || !first || !pbox || !ids || !bn || !B.auto_use)
+    if (!bvh || !first || !pbox || !ids)
         goto fail;
     bvh->cfg = cfg;
     bvh->first = first;
@@ -214,7 +212,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
     if (used) {
         const sc_sah_params sah = { cfg.leaf_size, cfg.sah_bins, cfg.traversal_cost, threads };
         size_t bn_count;
-        uint32_t root = 0;
+        const uint32_t root = 0;
         if (cfg.quality == SC_BUILD_QUALITY_HIGH) {
             /* Embree's choices: a spatial split tried where the object
              * split's children overlap by 1e-5 of the root's area and a
@@ -222,30 +220,28 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
              * references (the budgets measured: docs/compare.md). */
             const sc_spatial_params sp = { sah, 1e-5f, 0.1f, 0.2f, 16, split_triangle, &B };
             uint32_t *sids;
-            sc_bnode *snodes;
             size_t refs;
-            if (sc_build_spatial_sah(pbox, ids, used, &sp, &sids, &refs, &snodes, &bn_count) != 0)
+            if (sc_build_spatial_sah(pbox, ids, used, &sp, &sids, &refs, &bn, &bn_count) != 0)
                 goto fail;
-            free(ids), free(bn), free(B.auto_use);
-            ids = sids, bn = snodes;
+            free(ids);
+            B.ids = ids = sids;
             bvh->references = refs;
-            B.ids = ids, B.bn = bn;
-            B.auto_use = calloc(bn_count, 1);
-            if (!B.auto_use)
-                goto fail;
-        } else {
-            root = sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
-            bvh->references = used;
-        }
-        if (cfg.quality == SC_BUILD_QUALITY_HIGH) {
-            /* Up to 10 rounds over the 20 % largest nodes: on Sponza and a CAD
-             * engine the SAH cost of a binned SAH tree stops falling there
-             * (12 % and 6 % lower), at about 1.7x its build time
-             * (docs/compare.md). */
+            /* Then up to 10 rounds of reinsertion over the 20 % largest
+             * nodes: on Sponza and a CAD engine the SAH cost of a binned
+             * SAH tree stops falling there (12 % and 6 % lower), at about
+             * 1.7x its build time (docs/compare.md). */
             const sc_reinsertion_params rp = { 10, 0.2, threads };
             if (sc_reinsertion_optimize(bn, root, bn_count, &rp) != 0)
                 goto fail;
+        } else {
+            if (!(bn = malloc(sizeof(sc_bnode) * (2 * used - 1))))
+                goto fail;
+            sc_build_binned_sah(pbox, ids, used, &sah, bn, &bn_count);
+            bvh->references = used;
         }
+        B.bn = bn;
+        if (!(B.auto_use = calloc(bn_count, 1)))   /* per binary node: the auto rule's choice */
+            goto fail;
         B.root_area = box_area(&B.bn[root].box);
         if (!(B.root_area > 0))
             B.root_area = 1;

@@ -71,4 +71,10 @@ static inline void vbin(v3f c, v3f lo, v3f scale, int k[4])
 static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
 #endif
 
+/* A primitive's centre on one axis: the bits of vbox_centre's lane. */
+static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
+
+/* vbin's bin, clamped to the nb bins. */
+static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
+
 #endif
