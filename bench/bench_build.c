@@ -20,6 +20,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 #include <xmmintrin.h>
 
@@ -83,7 +84,9 @@ int main(int argc, char **argv)
     const char *spec = "proc:grid:cache:bunny00.off:8M";
     char *list = "1,2";
     int repeats = 3;
+    int qmask = 3;   /* bit 0: the medium builds, bit 1: the high ones */
     static const struct option opts[] = { { "mesh", required_argument, 0, 'm' },
+                                          { "quality", required_argument, 0, 'q' },
                                           { "threads", required_argument, 0, 't' },
                                           { "repeats", required_argument, 0, 'r' },
                                           { 0, 0, 0, 0 } };
@@ -93,7 +96,12 @@ int main(int argc, char **argv)
         case 'm': spec = optarg; break;
         case 't': list = optarg; break;
         case 'r': repeats = atoi(optarg); break;
-        default: die("usage: bench_build [--mesh SPEC] [--threads LIST] [--repeats R]");
+        case 'q':
+            qmask = !strcmp(optarg, "medium") ? 1 : !strcmp(optarg, "high") ? 2 : !strcmp(optarg, "both") ? 3 : 0;
+            if (!qmask)
+                die("--quality: medium, high or both");
+            break;
+        default: die("usage: bench_build [--mesh SPEC] [--threads LIST] [--repeats R] [--quality medium|high|both]");
         }
     }
     if (repeats < 1 || repeats > 1000)
@@ -147,11 +155,16 @@ int main(int argc, char **argv)
              * faulted in, and huge pages (both of us ask for them) come
              * cheaply when the previous build just freed some, slowly when
              * the kernel must compact memory first. */
+            tm[r] = th[r] = to[r] = toh[r] = NAN;
             if (r % 2) {
-                tm[r] = embree_build(dev, m, RTC_BUILD_QUALITY_MEDIUM);
-                th[r] = embree_build(dev, m, RTC_BUILD_QUALITY_HIGH);
+                if (qmask & 1)
+                    tm[r] = embree_build(dev, m, RTC_BUILD_QUALITY_MEDIUM);
+                if (qmask & 2)
+                    th[r] = embree_build(dev, m, RTC_BUILD_QUALITY_HIGH);
             }
             for (int q = 0; q < 2; q++) {
+                if (!(qmask >> q & 1))
+                    continue;
                 sc_bvh *b;
                 bc.quality = q ? SC_BUILD_QUALITY_HIGH : SC_BUILD_QUALITY_MEDIUM;
                 const double t0 = sc_now_seconds();
@@ -163,8 +176,10 @@ int main(int argc, char **argv)
                 sc_bvh_free(b);
             }
             if (r % 2 == 0) {
-                tm[r] = embree_build(dev, m, RTC_BUILD_QUALITY_MEDIUM);
-                th[r] = embree_build(dev, m, RTC_BUILD_QUALITY_HIGH);
+                if (qmask & 1)
+                    tm[r] = embree_build(dev, m, RTC_BUILD_QUALITY_MEDIUM);
+                if (qmask & 2)
+                    th[r] = embree_build(dev, m, RTC_BUILD_QUALITY_HIGH);
             }
         }
         rtcReleaseDevice(dev);

@@ -156,15 +156,14 @@ static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *
     for (int axis = 0; axis < 3; axis++)
         for (int k = 0; k < nb; k++)
             bin[axis][k] = vbox_empty();
-    const __typeof__(v3(scale)) vlo = v3(cb->lo), vscale = v3(scale);
+    const vpoint vlo = v3(cb->lo), vscale = v3(scale);
     for (size_t i = 0; i < n; i++) {
         const vbox p = vbox_load(&r[i].box);
         int k[4];
-        vbin(vbox_centre(p), vlo, vscale, k);
+        vbin(vbox_centre(p), vlo, vscale, nb, k);
         for (int axis = 0; axis < 3; axis++) {
-            const int kk = clamp_bin(k[axis], nb);
-            vbox_grow(&bin[axis][kk], p);
-            cnt[axis][kk]++;
+            vbox_grow(&bin[axis][k[axis]], p);
+            cnt[axis][k[axis]]++;
         }
     }
     for (int axis = 0; axis < 3; axis++)

@@ -11,6 +11,7 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 typedef struct vbox { __m128 lo, hi; } vbox;
+typedef __m128 vpoint;   /* x, y, z, unused */
 static inline vbox vbox_empty(void) { return (vbox){ _mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY) }; }
 /* lanes lo0 lo1 lo2 hi0 and lo2 hi0 hi1 hi2: two loads inside the box */
 static inline vbox vbox_load(const box3 *b)
@@ -20,6 +21,14 @@ static inline vbox vbox_load(const box3 *b)
 }
 static inline void vbox_grow(vbox *b, vbox o) { b->lo = _mm_min_ps(o.lo, b->lo), b->hi = _mm_max_ps(o.hi, b->hi); }
 static inline void vbox_grow_point(vbox *b, __m128 p) { b->lo = _mm_min_ps(p, b->lo), b->hi = _mm_max_ps(p, b->hi); }
+/* grows b by p if `take` (0 or 1), without a branch: the point not taken
+ * becomes an empty box's corner (+inf, -inf), which changes nothing */
+static inline void vbox_grow_point_if(vbox *b, __m128 p, int take)
+{
+    const __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-take));
+    b->lo = _mm_min_ps(_mm_or_ps(_mm_and_ps(m, p), _mm_andnot_ps(m, _mm_set1_ps(INFINITY))), b->lo);
+    b->hi = _mm_max_ps(_mm_or_ps(_mm_and_ps(m, p), _mm_andnot_ps(m, _mm_set1_ps(-INFINITY))), b->hi);
+}
 static inline __m128 vbox_centre(vbox b)
 {
     return _mm_add_ps(_mm_mul_ps(_mm_set1_ps(0.5f), b.lo), _mm_mul_ps(_mm_set1_ps(0.5f), b.hi));
@@ -37,15 +46,20 @@ static inline float vbox_area(vbox b)
     _mm_storeu_ps(d, _mm_max_ps(_mm_sub_ps(b.hi, b.lo), _mm_setzero_ps()));
     return 2 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
 }
-/* the bin of centre c on each axis, before clamping */
-static inline void vbin(__m128 c, __m128 lo, __m128 scale, int k[4])
+/* the bin of centre c on each axis, clamped to [0, nb) (clamp_bin lane
+ * by lane), without a branch */
+static inline void vbin(__m128 c, __m128 lo, __m128 scale, int nb, int k[4])
 {
-    _mm_storeu_si128((__m128i *)(void *)k, _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, lo), scale)));
+    __m128i b = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, lo), scale));
+    b = _mm_andnot_si128(_mm_srai_epi32(b, 31), b);
+    const __m128i top = _mm_set1_epi32(nb - 1), over = _mm_cmpgt_epi32(b, top);
+    _mm_storeu_si128((__m128i *)(void *)k, _mm_or_si128(_mm_and_si128(over, top), _mm_andnot_si128(over, b)));
 }
 static inline __m128 v3(const float *p) { return _mm_setr_ps(p[0], p[1], p[2], 0); }
 #else
 typedef struct vbox { box3 b; } vbox;
 typedef struct { float v[3]; } v3f;
+typedef v3f vpoint;
 static inline vbox vbox_empty(void) { vbox b; box_empty(&b.b); return b; }
 static inline vbox vbox_load(const box3 *b) { return (vbox){ *b }; }
 static inline void vbox_grow(vbox *b, vbox o) { box_grow(&b->b, &o.b); }
@@ -53,6 +67,11 @@ static inline void vbox_grow_point(vbox *b, v3f p)
 {
     box3 c = { { p.v[0], p.v[1], p.v[2] }, { p.v[0], p.v[1], p.v[2] } };
     box_grow(&b->b, &c);
+}
+static inline void vbox_grow_point_if(vbox *b, v3f p, int take)
+{
+    if (take)
+        vbox_grow_point(b, p);
 }
 static inline v3f vbox_centre(vbox b)
 {
@@ -63,10 +82,12 @@ static inline v3f vbox_centre(vbox b)
 }
 static inline box3 vbox_box(vbox b) { return b.b; }
 static inline float vbox_area(vbox b) { return box_area(&b.b); }
-static inline void vbin(v3f c, v3f lo, v3f scale, int k[4])
+static inline void vbin(v3f c, v3f lo, v3f scale, int nb, int k[4])
 {
-    for (int a = 0; a < 3; a++)
-        k[a] = (int)((c.v[a] - lo.v[a]) * scale.v[a]);
+    for (int a = 0; a < 3; a++) {
+        const int b = (int)((c.v[a] - lo.v[a]) * scale.v[a]);
+        k[a] = b < 0 ? 0 : b >= nb ? nb - 1 : b;
+    }
 }
 static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
 #endif
@@ -74,7 +95,7 @@ static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
 /* A primitive's centre on one axis: the bits of vbox_centre's lane. */
 static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
 
-/* vbin's bin, clamped to the nb bins. */
+/* a bin index clamped to the nb bins, as vbin clamps its lanes */
 static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
 
 #endif
