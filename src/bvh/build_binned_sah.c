@@ -148,14 +148,18 @@ static size_t partition_bins(sah_builder *B, size_t begin, size_t end, int axis,
     return i;
 }
 
-/* The subtree over ids[begin..end) goes into nodes[me ..): its node is me,
- * the left subtree (nl primitives) starts at me + 1 and the right one at
- * me + 2 nl, since a subtree of m primitives has at most 2m - 1 nodes. So
- * every node's index follows from the splits alone, whichever thread builds
- * which subtree and in what order: the tree is the same for any thread
- * count (unused slots stay unused). */
-static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uint32_t me, box3 bounds,
-                        box3 cb);
+/* The subtree over ids[begin..end) goes into nodes[me ..). A range of
+ * SC_SAH_PARALLEL_MIN primitives or more owns the slots [me, me + 2n - 1)
+ * (a subtree of m primitives has at most 2m - 1 nodes): the left subtree's
+ * start at me + 1 and the right one's at me + 2 nl, so these nodes' indices
+ * follow from the splits alone, whichever thread builds which subtree. A
+ * smaller range is built on one thread and numbers its descendants densely
+ * from *next (the slot after its first small ancestor), in the order of the
+ * recursion. So the tree is the same for any thread count, and the nodes
+ * touch the pages of the slots they use, not of all 2n - 1 (a fresh page
+ * costs its first touch). `next` is NULL for the large ranges. */
+static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uint32_t me, uint32_t *next,
+                        box3 bounds, box3 cb);
 
 typedef struct subtree_job {
     size_t begin, end;
@@ -194,7 +198,9 @@ static void *pool_worker(void *arg)
             break;                                  /* no task queued or running: done */
         const subtree_job j = B->queue[B->head++];
         pthread_mutex_unlock(&B->lock);
-        build_range(B, j.begin, j.end, j.depth, j.me, j.bounds, j.cb);
+        uint32_t next = j.me + 1;
+        build_range(B, j.begin, j.end, j.depth, j.me, j.end - j.begin < SC_SAH_PARALLEL_MIN ? &next : NULL, j.bounds,
+                    j.cb);
         pthread_mutex_lock(&B->lock);
         if (--B->unfinished == 0)
             pthread_cond_broadcast(&B->wake);
@@ -218,8 +224,8 @@ static void range_bounds(const sah_builder *B, size_t begin, size_t end, box3 *b
 
 /* bounds, cb: the box of ids[begin..end) and of their centres (the parent
  * knows them from its bins and its partition pass: no pass of its own). */
-static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uint32_t me, box3 bounds,
-                        box3 cb)
+static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uint32_t me, uint32_t *next,
+                        box3 bounds, box3 cb)
 {
     sc_bnode *node = &B->nodes[me];
     size_t n = end - begin;
@@ -346,17 +352,25 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
         range_bounds(B, begin, mid, &lb, &lcb);
         range_bounds(B, mid, end, &rb, &rcb);
     }
+    if (next) {
+        const uint32_t l = (*next)++, r = (*next)++;
+        node->leaf = 0, node->a = l, node->b = r;
+        build_range(B, begin, mid, depth + 1, l, next, lb, lcb);
+        build_range(B, mid, end, depth + 1, r, next, rb, rcb);
+        return;
+    }
     const uint32_t l = me + 1, r = me + 2 * (uint32_t)(mid - begin);
     node->leaf = 0, node->a = l, node->b = r;
+    uint32_t lnext = l + 1, rnext = r + 1;
     /* Large subtrees: the left one a task for the pool; the two write
      * disjoint id ranges and node ranges. */
-    if (B->pool && n >= SC_SAH_PARALLEL_MIN) {
+    if (B->pool) {
         const subtree_job job = { begin, mid, depth + 1, l, lb, lcb };
         push_task(B, &job);
     } else {
-        build_range(B, begin, mid, depth + 1, l, lb, lcb);
+        build_range(B, begin, mid, depth + 1, l, mid - begin < SC_SAH_PARALLEL_MIN ? &lnext : NULL, lb, lcb);
     }
-    build_range(B, mid, end, depth + 1, r, rb, rcb);
+    build_range(B, mid, end, depth + 1, r, end - mid < SC_SAH_PARALLEL_MIN ? &rnext : NULL, rb, rcb);
 }
 
 uint32_t sc_build_binned_sah(box3 *boxes, uint32_t *ids, size_t n, const sc_sah_params *p, sc_bnode *nodes,
@@ -380,7 +394,8 @@ uint32_t sc_build_binned_sah(box3 *boxes, uint32_t *ids, size_t n, const sc_sah_
         pthread_cond_destroy(&B.wake);
         free(B.queue);
     } else {
-        build_range(&B, 0, n, 0, 0, bounds, cb);   /* one thread, or no memory for the queue */
+        uint32_t next = 1;   /* one thread, or no memory for the queue */
+        build_range(&B, 0, n, 0, 0, n < SC_SAH_PARALLEL_MIN ? &next : NULL, bounds, cb);
     }
     *node_count = 2 * n - 1;
     return 0;
