@@ -7,12 +7,13 @@
  * 8-wide collapse, leaf encoding). Embree's is rtcCommitScene of a scene
  * holding one triangle geometry whose buffers were filled beforehand (its
  * whole build; the copy into its buffers is not counted). Each repeat
- * builds our medium and high and Embree's medium and high, ours first in
- * even repeats and Embree's first in odd ones; medians. A ratio above 1 means
- * spherecull builds faster. Both run with flush-to-zero /
- * denormals-are-zero, as Embree asks.
+ * builds our medium and high and Embree's medium and high (or only the
+ * medium or the high builds: --quality), ours first in even repeats and
+ * Embree's first in odd ones; medians. A ratio above 1 means spherecull
+ * builds faster. Both run with flush-to-zero / denormals-are-zero, as
+ * Embree asks.
  *
- *   bench_build [--mesh SPEC] [--threads LIST] [--repeats R] */
+ *   bench_build [--mesh SPEC] [--threads LIST] [--repeats R] [--quality medium|high|both] */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
 #include <getopt.h>
@@ -20,7 +21,6 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <math.h>
 #include <string.h>
 #include <xmmintrin.h>
 
@@ -77,6 +77,15 @@ static double embree_build(RTCDevice dev, const sc_mesh_view *m, enum RTCBuildQu
         die("Embree's build failed");
     rtcReleaseScene(scene);
     return s;
+}
+
+/* a table cell: v in fmt, or "-" when its quality was not built */
+static void cell(char *out, int on, const char *fmt, double v)
+{
+    if (on)
+        snprintf(out, 24, fmt, v);
+    else
+        snprintf(out, 24, "-");
 }
 
 int main(int argc, char **argv)
@@ -155,7 +164,6 @@ int main(int argc, char **argv)
              * faulted in, and huge pages (both of us ask for them) come
              * cheaply when the previous build just freed some, slowly when
              * the kernel must compact memory first. */
-            tm[r] = th[r] = to[r] = toh[r] = NAN;
             if (r % 2) {
                 if (qmask & 1)
                     tm[r] = embree_build(dev, m, RTC_BUILD_QUALITY_MEDIUM);
@@ -188,10 +196,23 @@ int main(int argc, char **argv)
                 first_hash[q] = hash[q];
             same &= hash[q] == first_hash[q];
         }
-        const double mo = sc_median(to, repeats), moh = sc_median(toh, repeats), mm = sc_median(tm, repeats),
-                     mh = sc_median(th, repeats);
-        printf("%7d %14.3f %12.3f %14.3f %12.3f %9.3f %7.3f %11.3f %9.3f  %016llx %016llx\n", counts[c], mo, moh, mm, mh,
-               mm / mo, mh / moh, sah[0], sah[1], (unsigned long long)hash[0], (unsigned long long)hash[1]);
+        /* a quality not built (--quality) prints "-" in its columns */
+        const int qm = qmask & 1, qh = qmask >> 1 & 1;
+        const double mo = qm ? sc_median(to, repeats) : 0, moh = qh ? sc_median(toh, repeats) : 0,
+                     mm = qm ? sc_median(tm, repeats) : 0, mh = qh ? sc_median(th, repeats) : 0;
+        char f[8][24];
+        cell(f[0], qm, "%.3f", mo), cell(f[1], qh, "%.3f", moh), cell(f[2], qm, "%.3f", mm);
+        cell(f[3], qh, "%.3f", mh), cell(f[4], qm, "%.3f", mm / mo), cell(f[5], qh, "%.3f", mh / moh);
+        cell(f[6], qm, "%.3f", sah[0]), cell(f[7], qh, "%.3f", sah[1]);
+        char hs[2][24];
+        for (int q = 0; q < 2; q++) {
+            if (qmask >> q & 1)
+                snprintf(hs[q], sizeof hs[q], "%016llx", (unsigned long long)hash[q]);
+            else
+                snprintf(hs[q], sizeof hs[q], "%16s", "-");
+        }
+        printf("%7d %14s %12s %14s %12s %9s %7s %11s %9s  %s %s\n", counts[c], f[0], f[1], f[2], f[3], f[4], f[5], f[6],
+               f[7], hs[0], hs[1]);
         fflush(stdout);
     }
     printf("# x-medium, x-high: Embree's build time over ours at the same quality (above 1: we build faster);\n"

@@ -27,10 +27,10 @@ typedef struct sah_builder {
     sc_bnode *nodes;
     int max_leaf, bins;
     float traversal_cost;
-    /* The task pool (threads > 1): subtrees of at least
-     * SC_SAH_PARALLEL_MIN primitives wait in a queue, oldest (largest)
-     * first, for whichever thread is free; `unfinished` counts the tasks
-     * queued or running. */
+    /* The task pool (threads > 1): the left subtrees of ranges of at
+     * least SC_SAH_PARALLEL_MIN primitives wait in a queue, oldest
+     * (largest) first, for whichever thread is free; `unfinished` counts
+     * the tasks queued or running. */
     int pool;
     pthread_mutex_t lock;
     pthread_cond_t wake;
@@ -77,10 +77,12 @@ static void select_median(sah_builder *B, size_t begin, size_t end, size_t mid, 
 }
 
 /* Whether primitive i's centre falls in bin `split` or below on `axis`:
- * the bin vbin gives it in the binning. */
+ * the bin vbin gives it in the binning (the same operations; the project
+ * compiles with -ffp-contract=off, so no multiply-add fuses here and not
+ * there). */
 static inline int goes_left(const sah_builder *B, size_t i, int axis, float lo, float scale, int nb, int split)
 {
-    return clamp_bin((int)((centre_of(&B->pbox[i], axis) - lo) * scale), nb) <= split;
+    return vbin1(centre_of(&B->pbox[i], axis), lo, scale, nb) <= split;
 }
 
 enum { PART_BLOCK = 64 };
@@ -91,8 +93,8 @@ enum { PART_BLOCK = 64 };
  * both ends are classified without a branch into lists of the misplaced
  * ones, which are then swapped in pairs (BlockQuicksort, Edelkamp and
  * Weiss 2016): a branch on each primitive's side mispredicts wherever
- * the two sides mix (the SAH step of the 8M grid 3.5 -> 3.25 s,
- * docs/compare.md). The few primitives left
+ * the two sides mix (with the branch-free binning, the SAH step of the 8M
+ * grid 3.5 -> 3.1 s, docs/compare.md). The few primitives left
  * between the blocks go by the plain two-ended loop. A centre may be
  * grown into its side twice (a block's remainder is seen again): min and
  * max do not mind. */
@@ -253,11 +255,11 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
             live[axis] = ext > 0;
             scale[axis] = live[axis] ? (float)nb * (1 - 0x1p-20f) / ext : 0;
         }
-        /* Every bin starts empty (growing an empty box gives the
-         * primitive's bits) and the binning has no branch: with bins set
-         * up by their first primitive, the test of whether a bin was used
-         * yet mispredicted in the small ranges that most nodes have (the
-         * SAH step of the 8M grid 3.5 -> 3.1 s with the partition below,
+        /* Every bin starts empty (growing an empty box by a finite one
+         * gives its bits) and the binning has no branch: with bins set up
+         * by their first primitive, the test of whether a bin was used yet
+         * mispredicted in the small ranges that most nodes have (with the
+         * block partition, the SAH step of the 8M grid 3.5 -> 3.1 s,
          * docs/compare.md). `used` marks the bins the sweep visits. */
         _Static_assert(MAX_BINS <= 64, "the used-bin masks are 64 bits");
         vbox vb[3][MAX_BINS];
@@ -362,7 +364,7 @@ static void build_range(sah_builder *B, size_t begin, size_t end, int depth, uin
     const uint32_t l = me + 1, r = me + 2 * (uint32_t)(mid - begin);
     node->leaf = 0, node->a = l, node->b = r;
     uint32_t lnext = l + 1, rnext = r + 1;
-    /* Large subtrees: the left one a task for the pool; the two write
+    /* A large range: its left subtree a task for the pool; the two write
      * disjoint id ranges and node ranges. */
     if (B->pool) {
         const subtree_job job = { begin, mid, depth + 1, l, lb, lcb };

@@ -109,7 +109,7 @@ static void range_bounds(const ref *r, size_t n, box3 *bounds, box3 *cb)
 
 static int obj_bin(const ref *r, int axis, float lo, float scale, int nb)
 {
-    return clamp_bin((int)((centre_of(&r->box, axis) - lo) * scale), nb);
+    return vbin1(centre_of(&r->box, axis), lo, scale, nb);
 }
 
 /* The best split after bin j of one axis's nb bins (into best, if it
@@ -174,12 +174,12 @@ static void object_split(const ref *r, size_t n, const box3 *cb, int nb, split *
 /* The bins a coordinate interval [x0, x1] meets, pos[] the nb + 1 planes. */
 static void bin_span(const float *pos, float scale, int nb, float x0, float x1, int *first, int *last)
 {
-    int f = clamp_bin((int)((x0 - pos[0]) * scale), nb);
+    int f = vbin1(x0, pos[0], scale, nb);
     while (f > 0 && x0 < pos[f])
         f--;
     while (f < nb - 1 && x0 >= pos[f + 1])
         f++;
-    int l = clamp_bin((int)((x1 - pos[0]) * scale), nb);
+    int l = vbin1(x1, pos[0], scale, nb);
     while (l > f && x1 <= pos[l])
         l--;
     while (l < nb - 1 && x1 > pos[l + 1])

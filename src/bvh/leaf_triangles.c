@@ -180,7 +180,9 @@ uint64_t sc_leaf_emit(bvh_builder *B, uint32_t bi)
          * the triangle block it could skip), so they are not sampled. */
         if (B->dry && W == 16) {
             leaf_spheres(B, leaf, SC_SPHERE_MINIMAL, W, sph);
-            double rate = auto_skip_rate(leaf, sph, W, 0x5c0ffee ^ ((uint64_t)bi * 0x9e3779b97f4a7c15ull));
+            /* seeded by the leaf's first slot, which the splits fix, not
+             * by the binary node's index, which depends on the layout */
+            double rate = auto_skip_rate(leaf, sph, W, 0x5c0ffee ^ ((uint64_t)leaf->a * 0x9e3779b97f4a7c15ull));
             B->auto_use[bi] = rate >= SC_BVH_AUTO_THRESHOLD16;
         }
         spheres = B->auto_use[bi];

@@ -2,7 +2,9 @@
  * two min/max instead of six compares per grow. Every operation gives the
  * bits of its box3.h counterpart lane by lane (vbox_grow is box_grow's
  * compare, since (v)minps(a, b) = a < b ? a : b), so a tree has the same
- * bits on the SSE2 path and the portable one. */
+ * bits on the SSE2 path and the portable one (their bins differ only for a
+ * bin product of 2^31 or more, which the builders' finite boxes never give:
+ * a centre is at most its range's extent from the range's low end). */
 #ifndef SPHERECULL_BVH_VBOX_H
 #define SPHERECULL_BVH_VBOX_H
 
@@ -46,14 +48,22 @@ static inline float vbox_area(vbox b)
     _mm_storeu_ps(d, _mm_max_ps(_mm_sub_ps(b.hi, b.lo), _mm_setzero_ps()));
     return 2 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
 }
-/* the bin of centre c on each axis, clamped to [0, nb) (clamp_bin lane
- * by lane), without a branch */
+/* the bin of centre c on each axis, clamped to [0, nb), without a branch
+ * (a negative, NaN or out-of-range product converts to INT_MIN: bin 0) */
 static inline void vbin(__m128 c, __m128 lo, __m128 scale, int nb, int k[4])
 {
     __m128i b = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, lo), scale));
     b = _mm_andnot_si128(_mm_srai_epi32(b, 31), b);
     const __m128i top = _mm_set1_epi32(nb - 1), over = _mm_cmpgt_epi32(b, top);
     _mm_storeu_si128((__m128i *)(void *)k, _mm_or_si128(_mm_and_si128(over, top), _mm_andnot_si128(over, b)));
+}
+/* one coordinate's bin: vbin's lane, the same conversion (cvttss2si, whose
+ * out-of-range and NaN result is INT_MIN, i.e. bin 0), defined for every
+ * input */
+static inline int vbin1(float c, float lo, float scale, int nb)
+{
+    const int b = _mm_cvttss_si32(_mm_set_ss((c - lo) * scale));
+    return b < 0 ? 0 : b >= nb ? nb - 1 : b;
 }
 static inline __m128 v3(const float *p) { return _mm_setr_ps(p[0], p[1], p[2], 0); }
 #else
@@ -82,20 +92,22 @@ static inline v3f vbox_centre(vbox b)
 }
 static inline box3 vbox_box(vbox b) { return b.b; }
 static inline float vbox_area(vbox b) { return box_area(&b.b); }
+/* one coordinate's bin, clamped to [0, nb); NaN goes to bin 0, and no
+ * out-of-range value reaches the conversion */
+static inline int vbin1(float c, float lo, float scale, int nb)
+{
+    const float x = (c - lo) * scale;
+    return x >= 0 ? (x < (float)nb ? (int)x : nb - 1) : 0;
+}
 static inline void vbin(v3f c, v3f lo, v3f scale, int nb, int k[4])
 {
-    for (int a = 0; a < 3; a++) {
-        const int b = (int)((c.v[a] - lo.v[a]) * scale.v[a]);
-        k[a] = b < 0 ? 0 : b >= nb ? nb - 1 : b;
-    }
+    for (int a = 0; a < 3; a++)
+        k[a] = vbin1(c.v[a], lo.v[a], scale.v[a], nb);
 }
 static inline v3f v3(const float *p) { return (v3f){ { p[0], p[1], p[2] } }; }
 #endif
 
 /* A primitive's centre on one axis: the bits of vbox_centre's lane. */
 static inline float centre_of(const box3 *b, int axis) { return 0.5f * b->lo[axis] + 0.5f * b->hi[axis]; }
-
-/* a bin index clamped to the nb bins, as vbin clamps its lanes */
-static inline int clamp_bin(int k, int nb) { return k < 0 ? 0 : k >= nb ? nb - 1 : k; }
 
 #endif
