@@ -87,6 +87,27 @@ static inline int goes_left(const sah_builder *B, size_t i, int axis, float lo, 
 
 enum { PART_BLOCK = 64 };
 
+/* One block of partition_bins: the PART_BLOCK primitives from `first` on
+ * (step 1, the left block) or down (step -1, the right block). Lists in
+ * off[] the offsets of those on the wrong side (right in the left block,
+ * left in the right one) and returns their number; grows lc and rc by
+ * every centre. */
+static inline size_t scan_block(const sah_builder *B, size_t first, int step, int axis, float lo, float scale,
+                                int split, unsigned char *off, vbox *lc, vbox *rc)
+{
+    size_t k = 0;
+    for (int t = 0; t < PART_BLOCK; t++) {
+        const size_t i = step > 0 ? first + (size_t)t : first - (size_t)t;
+        const int left = goes_left(B, i, axis, lo, scale, B->bins, split);
+        const vpoint c = vbox_centre(vbox_load(&B->pbox[i]));
+        vbox_grow_point_if(lc, c, left);
+        vbox_grow_point_if(rc, c, !left);
+        off[k] = (unsigned char)t;
+        k += (size_t)(left != (step > 0));
+    }
+    return k;
+}
+
 /* Moves the primitives of [begin, end) whose centre's bin is `split` or
  * below before the others and returns where the others start; grows lc
  * and rc by the two sides' centres. Blocks of PART_BLOCK primitives from
@@ -106,28 +127,10 @@ static size_t partition_bins(sah_builder *B, size_t begin, size_t end, int axis,
     unsigned char offl[PART_BLOCK], offr[PART_BLOCK];
     size_t nl = 0, nr = 0, sl = 0, sr = 0;
     while (j - i >= 2 * PART_BLOCK) {
-        if (nl == 0) {
-            sl = 0;
-            for (int t = 0; t < PART_BLOCK; t++) {
-                const int left = goes_left(B, i + (size_t)t, axis, lo, scale, nb, split);
-                const vpoint c = vbox_centre(vbox_load(&B->pbox[i + (size_t)t]));
-                vbox_grow_point_if(lc, c, left);
-                vbox_grow_point_if(rc, c, !left);
-                offl[nl] = (unsigned char)t;
-                nl += (size_t)!left;
-            }
-        }
-        if (nr == 0) {
-            sr = 0;
-            for (int t = 0; t < PART_BLOCK; t++) {
-                const int left = goes_left(B, j - 1 - (size_t)t, axis, lo, scale, nb, split);
-                const vpoint c = vbox_centre(vbox_load(&B->pbox[j - 1 - (size_t)t]));
-                vbox_grow_point_if(lc, c, left);
-                vbox_grow_point_if(rc, c, !left);
-                offr[nr] = (unsigned char)t;
-                nr += (size_t)left;
-            }
-        }
+        if (nl == 0)
+            sl = 0, nl = scan_block(B, i, 1, axis, lo, scale, split, offl, lc, rc);
+        if (nr == 0)
+            sr = 0, nr = scan_block(B, j - 1, -1, axis, lo, scale, split, offr, lc, rc);
         const size_t m = nl < nr ? nl : nr;
         for (size_t t = 0; t < m; t++)
             swap_prims(B, i + offl[sl + t], j - 1 - offr[sr + t]);
