@@ -22,7 +22,7 @@ struct sc_bvh {
     size_t references;           /* triangles in the leaves, counted once per leaf: more than
                                     triangles where the high quality's spatial splits cut some */
     int depth;
-    int prefetch;                /* the traversal prefetches hit children (SC_PREFETCH_TREE_BYTES) */
+    int prefetch;                /* which traversals prefetch the children they push (below) */
     double sah_cost, build_seconds;
     double built_sah_cost;       /* sah_cost when built; a refit changes sah_cost only */
     sc_bvh_config cfg;
@@ -30,16 +30,21 @@ struct sc_bvh {
     uint32_t *first;             /* mesh g's triangle t is first[g] + t (mesh_count + 1 entries) */
 };
 
-/* From this many bytes of nodes and leaves the traversal prefetches the
- * children a node pushes (single rays: every hit child), as Embree does in
- * every tree: a tree this large is mostly outside the caches, so a pushed
- * child would otherwise wait for memory when it is popped. Below it the
- * prefetches cost about what they save. Measured (docs/compare.md,
- * nineteenth session): trees of 19 MB and more gain 2-20 % on every ray
- * kind; trees of 4-6 MB gain 4-9 % on incoherent rays and lose up to 11 %
- * on coherent ones. */
-#ifndef SC_PREFETCH_TREE_BYTES
-#define SC_PREFETCH_TREE_BYTES ((size_t)8 << 20)
+/* A traversal in a tree that does not fit in the caches waits for memory
+ * at each child it pops. So from these sizes (nodes and leaves) it
+ * prefetches the first four cache lines of the children a node pushes, as
+ * Embree does in every tree: closest-hit single rays from 2 MiB (beyond a
+ * core's L2), any-hit rays and packets from 8 MiB. Below them the
+ * prefetches cost about what they save, and an any-hit ray ends with most
+ * of what it pushed never popped. bvh.prefetch: 0 none, 1 closest-hit
+ * single rays, 2 every traversal. Measured (docs/compare.md, nineteenth
+ * session): trees of 19 MB and more gain 2-20 % on every ray kind; trees of
+ * 4-6 MB gain 4-9 % on random rays, and their shadow rays lose 0-4 %. */
+#ifndef SC_PREFETCH_CLOSEST_BYTES
+#define SC_PREFETCH_CLOSEST_BYTES ((size_t)2 << 20)
+#endif
+#ifndef SC_PREFETCH_ALL_BYTES
+#define SC_PREFETCH_ALL_BYTES ((size_t)8 << 20)
 #endif
 
 /* The mesh that holds global triangle id tri (first[] ascending). */

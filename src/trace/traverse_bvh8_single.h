@@ -66,7 +66,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     }
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
-    const int prefetch = bvh->prefetch;
+    const int prefetch = bvh->prefetch > ANY;   /* bvh_internal.h */
     sc_ray cur = *ray;
     uint32_t best_prim = SC_HITREC_MISS;
     float best_u = 0, best_v = 0;
@@ -100,7 +100,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
             /* In a large tree every hit child's first four cache lines
              * start loading now, as in Embree: the ones pushed are in
              * cache when they are popped, instead of each pop waiting for
-             * memory (SC_PREFETCH_TREE_BYTES, bvh_internal.h). */
+             * memory. */
             if (prefetch)
                 for (unsigned h = m; h; h &= h - 1)
                     sc_prefetch_ref(bvh, node->child[__builtin_ctz(h)]);
@@ -109,8 +109,9 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
                  * Embree's occlusion traversal): push all but the first. */
                 ref = node->child[__builtin_ctz(m)];
                 /* Pushed from the last slot down, so they pop in slot order
-                 * (the builder puts larger boxes first). No prefetch: most
-                 * pushed subtrees of a blocked shadow ray are never popped. */
+                 * (the builder puts larger boxes first). Most pushed
+                 * subtrees of a blocked shadow ray are never popped: hence
+                 * the prefetch above only in the largest trees. */
                 for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
                     stack[sp++].ref = node->child[31 - __builtin_clz(m)];
                 continue;
