@@ -297,8 +297,10 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
                     goto fail;
                 bvh->nodes = (sc_bvh_node8 *)(void *)block;
                 bvh->leaves = block + node_bytes;   /* zero: the gaps between leaves stay so */
-                bvh->prefetch = (node_bytes + leaf_bytes >= SC_PREFETCH_CLOSEST_BYTES) +
-                                (node_bytes + leaf_bytes >= SC_PREFETCH_ALL_BYTES);
+                const size_t tree = node_bytes + leaf_bytes;
+                bvh->prefetch = tree >= SC_PREFETCH_ALL_BYTES       ? SC_PREFETCH_ALL
+                                : tree >= SC_PREFETCH_CLOSEST_BYTES ? SC_PREFETCH_CLOSEST
+                                                                    : SC_PREFETCH_NONE;
             }
         }
         root_nodes = B.node_used;

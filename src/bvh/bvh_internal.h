@@ -22,7 +22,7 @@ struct sc_bvh {
     size_t references;           /* triangles in the leaves, counted once per leaf: more than
                                     triangles where the high quality's spatial splits cut some */
     int depth;
-    int prefetch;                /* which traversals prefetch the children they push (below) */
+    int prefetch;                /* sc_prefetch_level: which traversals prefetch the children they push */
     double sah_cost, build_seconds;
     double built_sah_cost;       /* sah_cost when built; a refit changes sah_cost only */
     sc_bvh_config cfg;
@@ -36,8 +36,7 @@ struct sc_bvh {
  * Embree does in every tree: closest-hit single rays from 2 MiB (beyond a
  * core's L2), any-hit rays and packets from 8 MiB. Below them the
  * prefetches cost about what they save, and an any-hit ray ends with most
- * of what it pushed never popped. bvh.prefetch: 0 none, 1 closest-hit
- * single rays, 2 every traversal. Measured (docs/compare.md, nineteenth
+ * of what it pushed never popped. Measured (docs/compare.md, nineteenth
  * session): trees of 19 MB and more gain 2-20 % on every ray kind; trees of
  * 4-6 MB gain 4-9 % on random rays, and their shadow rays lose 0-4 %. */
 #ifndef SC_PREFETCH_CLOSEST_BYTES
@@ -46,6 +45,7 @@ struct sc_bvh {
 #ifndef SC_PREFETCH_ALL_BYTES
 #define SC_PREFETCH_ALL_BYTES ((size_t)8 << 20)
 #endif
+typedef enum sc_prefetch_level { SC_PREFETCH_NONE, SC_PREFETCH_CLOSEST, SC_PREFETCH_ALL } sc_prefetch_level;
 
 /* The mesh that holds global triangle id tri (first[] ascending). */
 static inline size_t sc_mesh_of(const uint32_t *first, size_t mesh_count, uint32_t tri)

@@ -500,7 +500,7 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 }
             }
             for (int i = cnt - 1; i > 0; i--) {
-                if (bvh->prefetch > 1)   /* a large tree (bvh_internal.h) */
+                if (bvh->prefetch == SC_PREFETCH_ALL)   /* a large tree (bvh_internal.h) */
                     sc_prefetch_ref(bvh, hr[i]);
                 stack[sp].ref = hr[i];
                 stack[sp].mask = hmk[i];

@@ -36,7 +36,7 @@
  * node's boxes and references, or a leaf's spheres and first rows. */
 SC_TRAVERSE_INLINE void sc_prefetch_ref(const sc_bvh *bvh, uint64_t ref)
 {
-    const char *p = sc_ref_is_leaf(ref) ? (const char *)bvh->leaves + sc_ref_offset(ref)
+    const char *p = sc_ref_is_leaf(ref) ? (const char *)sc_leaf_block(bvh->leaves, ref)
                                         : (const char *)bvh->nodes + ref;
     __builtin_prefetch(p);
     __builtin_prefetch(p + 64);
@@ -66,7 +66,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     }
     const float tmin = ray->tmin;
     float tmax = ray->tmax;
-    const int prefetch = bvh->prefetch > ANY;   /* bvh_internal.h */
+    const int prefetch = bvh->prefetch >= (ANY ? SC_PREFETCH_ALL : SC_PREFETCH_CLOSEST);
     sc_ray cur = *ray;
     uint32_t best_prim = SC_HITREC_MISS;
     float best_u = 0, best_v = 0;
