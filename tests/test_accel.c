@@ -824,7 +824,12 @@ static void packet_rays(sc_ray *rays, size_t ncam, size_t n, const float *aim, s
                 /* the first half wide (the packet is wide next to each
                  * instance), the second narrow (a packet through them) */
                 const float fov = r < ncam / 2 ? 0.9f : 0.06f;
-                const float px = (float)(tx + j % 4) / (float)side - 0.5f, py = (float)(ty + j / 4) / (float)side - 0.5f;
+                /* every other tile shifted by 2.5 pixels: the tiles in the
+                 * middle column then straddle x = 0 (lanes in two octants),
+                 * the others have a lane with d_x = 0 (parallel to an axis) */
+                const float sh = (r / 16) % 2 ? 2.5f : 0.0f;
+                const float px = ((float)(tx + j % 4) + sh) / (float)side - 0.5f,
+                            py = (float)(ty + j / 4) / (float)side - 0.5f;
                 sc_ray q = { { eye[0], eye[1], eye[2] }, 0, { fov * px, fov * py, -1 }, INFINITY };
                 if (r % 23 == 5)
                     q.tmax = 10;   /* ends inside the scene */

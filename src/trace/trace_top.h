@@ -32,7 +32,8 @@
 
 typedef struct sc_top_item {
     const sc_bvh *const *bvh;    /* where the item's BVH is kept (read at trace time); *bvh may be NULL */
-    const double *inv;           /* 12: world to object, row-major 3x4; NULL: no transform */
+    const double *inv;           /* 16: world to object, column-major 3x4, each column padded with a
+                                  * 0 to four (one 256-bit load); NULL: no transform */
     const float *cof;            /* 9: cof(M), row-major: object normals to world */
     uint32_t inst;               /* hit.inst of its hits (SC_INVALID_ID without a transform) */
     float center[3], half;       /* its world box: centre, half diagonal (packets' coherence test) */
@@ -44,6 +45,7 @@ typedef struct sc_top {
     float lo[3], hi[3];          /* the top tree's box */
     float center[3], half;       /* the same box: centre, half diagonal (packets' coherence test) */
     double kappa, radius;
+    float grow_a, grow_b;        /* E <= grow_a m + grow_b in float (sc_top_growth_f) */
 } sc_top;
 
 /* A miss of a ray ending at tmax: what the top level starts from. */
@@ -61,21 +63,38 @@ static inline double sc_top_growth(const sc_top *T, double m)
     return 0x1p-23 * T->kappa * (3.4642 * m + T->radius) * 1.01 + 0x1p-120;
 }
 
+/* The float constants of sc_top_growth, rounded up with room for the
+ * float rounding of m and of one FMA: fmaf(m_f, a, b) >= sc_top_growth(m)
+ * when m_f >= m (1 - u). 2^-118 covers an m a that FTZ flushes (< 2^-126)
+ * besides the 2^-120 of the double form. Infinite for absurd kappa: every
+ * box is then kept. */
+static inline void sc_top_growth_consts(sc_top *T)
+{
+    const double a = 0x1p-23 * T->kappa * 3.4642 * 1.01 * (1 + 0x1p-20);
+    const double b = 0x1p-23 * T->kappa * T->radius * 1.01 * (1 + 0x1p-20) + 0x1p-118;
+    float fa = (float)a, fb = (float)b;
+    fa = fa < a ? nextafterf(fa, INFINITY) : fa;
+    fb = fb < b ? nextafterf(fb, INFINITY) : fb;
+    T->grow_a = fa, T->grow_b = fb;
+}
+
 /* The growth of the slab distances on an axis with reciprocal rd: E |rd|, rounded up. */
 static inline float sc_top_ek(double E, float rd)
 {
     return (float)(E * fabs((double)rd) * (1 + 0x1p-20));
 }
 
-/* Row `row` of the world-to-object transform on a point and on a
- * direction, in double, rounded once (the object ray's components). */
-static inline float sc_top_xfm_point(const double *row, double x, double y, double z)
+/* Component i of the world-to-object transform (column-major, sc_top_item)
+ * on a point and on a direction, in double, rounded once (the object ray's
+ * components). The SIMD forms (traverse_top_bvh8.h, traverse_top_packet.h)
+ * take the same operations in the same order, so the same bits. */
+static inline float sc_top_xfm_point(const double *inv, int i, double x, double y, double z)
 {
-    return (float)(row[0] * x + row[1] * y + row[2] * z + row[3]);
+    return (float)(((inv[i] * x + inv[4 + i] * y) + inv[8 + i] * z) + inv[12 + i]);
 }
-static inline float sc_top_xfm_dir(const double *row, double x, double y, double z)
+static inline float sc_top_xfm_dir(const double *inv, int i, double x, double y, double z)
 {
-    return (float)(row[0] * x + row[1] * y + row[2] * z);
+    return (float)((inv[i] * x + inv[4 + i] * y) + inv[8 + i] * z);
 }
 
 /* E of the comment above for ray r; m is returned for the set-up. */
@@ -95,8 +114,8 @@ static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out
 static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
 {
     for (int i = 0; i < 3; i++) {
-        o->org[i] = sc_top_xfm_point(inv + 4 * i, r->org[0], r->org[1], r->org[2]);
-        o->dir[i] = sc_top_xfm_dir(inv + 4 * i, r->dir[0], r->dir[1], r->dir[2]);
+        o->org[i] = sc_top_xfm_point(inv, i, r->org[0], r->org[1], r->org[2]);
+        o->dir[i] = sc_top_xfm_dir(inv, i, r->dir[0], r->dir[1], r->dir[2]);
     }
     o->tmin = r->tmin;
     o->tmax = r->tmax;
@@ -247,26 +266,36 @@ static inline unsigned sc_top_slab(const sc_top_ray *t, const sc_bvh_node8 *node
 #endif
 }
 
-/* The set-up of the FMA node test (node_bvh8_slab.h) for a ray in the top
- * tree: sc_ray_precompute's slab constants alone (the triangle tests'
- * shear is not needed here), with the distance bound of each axis raised
- * by E / 2u: the padding is about 2u m in space, so the growth E is folded
- * into it (10 % over, for the float roundings here). */
-static inline void sc_top_pre(const sc_top *T, const sc_ray *r, double E, sc_ray_pre *p)
+/* The set-up of the FMA node test (node_bvh8_slab.h) for a non-parallel
+ * ray in the top tree: sc_ray_precompute's slab constants alone (the
+ * triangle tests' shear is not needed here), with the distance bound of
+ * each axis raised by X = E / 2u: the padding is about 2u m in space, so
+ * the growth E is folded into it (10 % over, for the float roundings
+ * here). All in float: the largest distance m of the origin from the top
+ * box's planes, rounded to nearest, is at least (1 - u) of the exact one,
+ * which sc_top_growth_consts allows for; each bound
+ * fl(fl(d_k + X) (1 + 2^-20)) is at least d_k + X for the same reason.
+ * The x86 kernels compute the same operations in one xmm register
+ * (traverse_top_bvh8.h). */
+#define SC_TOP_X_SCALE (0x1p23f * 1.1f * (1.0f + 0x1p-20f))
+#define SC_TOP_M_UP (1.0f + 0x1p-20f)
+static inline void sc_top_pre(const sc_top *T, const sc_ray *r, sc_ray_pre *p)
 {
-    const double X = E * 0x1p23 * 1.1;
+    float dk[3];
     for (int k = 0; k < 3; k++) {
-        const double dl = fabs((double)T->lo[k] - r->org[k]), dh = fabs((double)T->hi[k] - r->org[k]);
-        /* rounded up: at least the distance plus X */
-        const float m = (float)((dl > dh ? dl : dh) + X) * (1.0f + 0x1p-22f);
+        const float dl = fabsf(T->lo[k] - r->org[k]), dh = fabsf(T->hi[k] - r->org[k]);
+        dk[k] = dl > dh ? dl : dh;
+    }
+    float m = dk[0] > dk[1] ? dk[0] : dk[1];
+    m = dk[2] > m ? dk[2] : m;
+    const float X = fmaf(m, T->grow_a, T->grow_b) * SC_TOP_X_SCALE;
+    for (int k = 0; k < 3; k++) {
+        const float mk = (dk[k] + X) * SC_TOP_M_UP;
         p->org[k] = r->org[k];
         p->dir[k] = r->dir[k];
-        float d = r->dir[k];
-        if (fabsf(d) < SC_MIN_RCP_INPUT)
-            d = copysignf(SC_MIN_RCP_INPUT, d);
-        p->rd[k] = 1.0f / d;
-        const float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
-        const float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-124f, 0x1p-122f));
+        p->rd[k] = 1.0f / r->dir[k];
+        const float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(mk, 0x1.0cp-23f, 0x1p-123f));
+        const float pad = fmaf(fabsf(p->rd[k]), g, fmaf(mk, 0x1p-124f, 0x1p-122f));
         const float ord = p->org[k] * p->rd[k];
         p->ord_near[k] = ord + pad;
         p->ord_far[k] = ord - pad;
@@ -277,7 +306,7 @@ static inline void sc_top_pre(const sc_top *T, const sc_ray *r, double E, sc_ray
     }
     p->tmin = r->tmin;
     p->tmax = r->tmax;
-    p->parallel = sc_ray_parallel(r);
+    p->parallel = 0;
     p->kx = 0, p->ky = 1, p->kz = 2;
     p->Sx = p->Sy = p->Sz = 0;
     p->xK = p->xc0 = 0;

@@ -4,11 +4,75 @@
  *   SC_TOP_TABLE   the level's own sc_trace_kernels table, whose
  *                  single-ray kernels trace the items' BVHs.
  * A non-parallel ray takes the level's FMA node test with the instance
- * growth folded into its padding (sc_top_pre); a parallel ray the grown
+ * growth folded into its padding (sc_top_pre, top_ctx_init); a parallel ray the grown
  * boxes of sc_top_slab. Items are visited near first; of hits at equal t
  * the smaller (inst, geom, prim) wins, so the answer does not depend on the
  * order. */
 #include "trace_top.h"
+
+#ifdef SC_X86_INLINE
+/* sc_top_object_ray with the four columns in ymm registers: the same
+ * double operations in the same order (no FMA), so the same bits. The
+ * stores of four lanes write 0 into tmin and tmax, which are set after. */
+SC_X86_INLINE void top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
+{
+    const __m256d c0 = _mm256_loadu_pd(inv), c1 = _mm256_loadu_pd(inv + 4), c2 = _mm256_loadu_pd(inv + 8),
+                  c3 = _mm256_loadu_pd(inv + 12);
+    const __m256d p = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c0, _mm256_set1_pd(r->org[0])),
+                                                                _mm256_mul_pd(c1, _mm256_set1_pd(r->org[1]))),
+                                                  _mm256_mul_pd(c2, _mm256_set1_pd(r->org[2]))),
+                                    c3);
+    const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c0, _mm256_set1_pd(r->dir[0])),
+                                                  _mm256_mul_pd(c1, _mm256_set1_pd(r->dir[1]))),
+                                    _mm256_mul_pd(c2, _mm256_set1_pd(r->dir[2])));
+    _mm_storeu_ps(o->org, _mm256_cvtpd_ps(p));
+    _mm_storeu_ps(o->dir, _mm256_cvtpd_ps(v));
+    o->tmin = r->tmin;
+    o->tmax = r->tmax;
+}
+
+/* sc_top_pre with the three axes in one xmm register (lane 3 ignored), as
+ * ctx_init_fast does for a BVH's own rays: the same operations, so the
+ * same bits, without the stores and reloads of the struct. */
+SC_X86_INLINE void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
+{
+    const __m128 sgn = _mm_set1_ps(-0.0f);
+    const __m128 o = _mm_loadu_ps(r->org), d = _mm_loadu_ps(r->dir);
+    const __m128 dk = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(T->lo), o)),
+                                 _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(T->hi), o)));
+    /* the largest of lanes 0-2 (max is exact: the order does not matter) */
+    const __m128 m01 = _mm_max_ps(dk, _mm_permute_ps(dk, 0x55));
+    const float m = _mm_cvtss_f32(_mm_max_ps(m01, _mm_permute_ps(dk, 0xaa)));
+    const float X = fmaf(m, T->grow_a, T->grow_b) * SC_TOP_X_SCALE;
+    const __m128 mk = _mm_mul_ps(_mm_add_ps(dk, _mm_set1_ps(X)), _mm_set1_ps(SC_TOP_M_UP));
+    const __m128 rd = _mm_div_ps(_mm_set1_ps(1.0f), d);
+    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
+                                  _mm_fmadd_ps(mk, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-123f)));
+    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
+                                    _mm_fmadd_ps(mk, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
+    const __m128 ord = _mm_mul_ps(o, rd);
+    const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
+#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
+    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
+    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
+    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
+#undef BC
+    c->tmin = _mm256_set1_ps(r->tmin);
+    ctx_set_rows(c, r);
+}
+#else
+static inline void top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
+{
+    sc_top_object_ray(inv, r, o);
+}
+
+static inline void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
+{
+    sc_ray_pre pre;
+    sc_top_pre(T, r, &pre);
+    ctx_init(c, &pre);
+}
+#endif
 
 /* One item against the ray: its hit into *best when better (closest), or
  * 1 if it occludes (any). */
@@ -21,7 +85,7 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
         return 0;
     sc_ray r = *ray;
     if (it->inv) {
-        sc_top_object_ray(it->inv, ray, &r);
+        top_object_ray(it->inv, ray, &r);
         if (!sc_ray_valid(&r))
             return 0;
     }
@@ -58,16 +122,16 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
 SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitrec *best, sc_trace_stats *st,
                                     const int ANY)
 {
-    double m;
-    const double E = sc_top_grow(T, ray, &m);
     const int parallel = sc_ray_parallel(ray);
     trace_ctx ctx;
     sc_top_ray tr;
-    sc_ray_pre pre;
-    sc_top_pre(T, ray, E, &pre);
-    ctx_init(&ctx, &pre);
-    if (parallel)
-        sc_top_ray_setup(ray, E, &tr);
+    if (parallel) {
+        double m;
+        memset(&ctx, 0, sizeof ctx);   /* not read: the grown-box test below instead */
+        sc_top_ray_setup(ray, sc_top_grow(T, ray, &m), &tr);
+    } else {
+        top_ctx_init(&ctx, T, ray);
+    }
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
     stack[sp].ref = 0;
@@ -96,6 +160,16 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
             stack[sp].ref = node->child[i];
             stack[sp].dist = dist[i];
             sp++;
+            continue;
+        }
+        if (ANY) {
+            /* any hit ends the search: no order, as in the BVHs' own walk */
+            for (unsigned m = mask; m; m &= m - 1) {
+                const int i = __builtin_ctz(m);
+                stack[sp].ref = node->child[i];
+                stack[sp].dist = dist[i];
+                sp++;
+            }
             continue;
         }
         const uint64_t nearest = sc_order_children(node, mask, dist, stack, &sp);

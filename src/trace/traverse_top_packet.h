@@ -4,11 +4,17 @@
  * walks the top tree together; the lanes that reach an instance go through
  * its tree as one packet of object rays (sc_trace_packet_lanes), each
  * ending where sc_top_item_tmax says (one float past its closest hit so
- * far, or the ray's own end for the exact test). The per-lane work (set-up, box tests,
- * object rays) is written over the lanes in rows, so the ISA's vectors take
- * 4, 8 or 16 lanes at a time. Lane i's answer is bit for bit the single-ray
- * top kernel's for ray i (of the hits the smallest t, then inst, geom,
- * prim, whatever order the instances are reached in).
+ * far, or the ray's own end for the exact test). Lane i's answer is bit
+ * for bit the single-ray top kernel's for ray i (of the hits the smallest
+ * t, then inst, geom, prim, whatever order the instances are reached in).
+ *
+ * The box tests are the single ray's FMA test (sc_top_pre's constants, the
+ * growth folded into the padding) over the lanes in the ISA's vectors; a
+ * packet whose lanes share an octant first tests the node's 8 children
+ * against its frustum in one 8-wide test, and only the children that pass
+ * lane by lane (as the BVHs' own packets do, traverse_bvh8_packet.h). The
+ * object rays are made only for the lanes that reach an instance. Lanes
+ * parallel to an axis take the single-ray top kernel.
  *
  * A packet pays where its rays stay together through a tree, that is where
  * the packet is narrow next to what it is tracing. Its width at distance D
@@ -31,17 +37,20 @@
 #define SC_TOP_PACKET_SPREAD 0.1f
 
 typedef struct top_pk {
-    /* the world rays, rows of 16 lanes */
+    /* the world rays, rows of 16 lanes (lanes not traced repeat a traced one) */
     float o[3][16] __attribute__((aligned(64)));
     float d[3][16] __attribute__((aligned(64)));
     float tmin[16] __attribute__((aligned(64)));
     float tmax[16] __attribute__((aligned(64)));
-    /* the grown-box test of sc_top_slab, lane by lane: fl(1/d), E |1/d|, d < 0 */
+    /* the FMA box test of each lane (sc_top_pre) */
     float rd[3][16] __attribute__((aligned(64)));
-    float Ek[3][16] __attribute__((aligned(64)));
-    int32_t neg[3][16] __attribute__((aligned(64)));
-    uint32_t negm[3];                                /* the same as lane bits */
+    float ordn[3][16] __attribute__((aligned(64)));
+    float ordf[3][16] __attribute__((aligned(64)));
     float tcull[16] __attribute__((aligned(64)));   /* sc_top_tmax: how far boxes are tested */
+    uint32_t negm[3];                                /* lanes with d_k < 0 */
+    int uniform, oct;                                /* every lane in octant oct */
+    /* a uniform packet's frustum: the extreme rd and offsets over the lanes */
+    float fr_rdmin[3], fr_rdmax[3], fr_onmax[3], fr_ofmin[3], fr_tmin, fr_tmax;
     sc_hitrec best[16];                              /* closest */
     int32_t *occluded;                               /* any */
     const sc_top *T;
@@ -88,9 +97,10 @@ SC_TRAVERSE_INLINE void top_pk_occluded(top_pk *P, unsigned l)
     P->active &= ~(1u << l);
 }
 
-/* The lanes L that reached item `item`: their object rays (sc_top_object_ray
- * lane by lane) as one packet, or one by one where the packet is wide next
- * to the item. */
+/* The lanes L that reached item `item`: each lane's object ray
+ * (top_object_ray, as the single-ray walk makes it), traced at once
+ * through the single-ray kernel where the packet is wide next to the item,
+ * else gathered into one packet of object rays. */
 SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
 {
     const sc_top_item *it = &P->T->items[item];
@@ -98,68 +108,48 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     if (!b)
         return;
     const unsigned W = P->W;
-    float rows[8][16] __attribute__((aligned(64)));
-    int32_t valid[16];
-    if (it->inv) {
-        const double *m = it->inv;
-        for (int l = 0; l < 16; l++)
-            for (int i = 0; i < 3; i++) {
-                rows[i][l] = sc_top_xfm_point(m + 4 * i, P->o[0][l], P->o[1][l], P->o[2][l]);
-                rows[4 + i][l] = sc_top_xfm_dir(m + 4 * i, P->d[0][l], P->d[1][l], P->d[2][l]);
-            }
-        /* sc_ray_valid of each object ray */
-        for (int l = 0; l < 16; l++) {
-            int ok = 1;
-            for (int k = 0; k < 3; k++)
-                ok &= fabsf(rows[k][l]) < SC_MAX_ORIGIN && fabsf(rows[4 + k][l]) <= FLT_MAX;
-            ok &= rows[4][l] != 0 || rows[5][l] != 0 || rows[6][l] != 0;
-            valid[l] = ok;
-        }
-    } else {
-        for (int l = 0; l < 16; l++) {
-            for (int k = 0; k < 3; k++)
-                rows[k][l] = P->o[k][l], rows[4 + k][l] = P->d[k][l];
-            valid[l] = 1;
-        }
-    }
-    uint32_t ok = 0;
-    for (uint32_t e = L; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        ok |= (uint32_t)(valid[l] != 0) << l;
-        rows[3][l] = P->tmin[l];
-        rows[7][l] = P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]);
-    }
-    if (!ok)
-        return;
     sc_trace_stats s;
     memset(&s, 0, sizeof s);
     sc_trace_stats *sp = P->st ? &s : NULL;
-    if (!top_pk_narrow(P, it->center, it->half)) {
-        const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
-        for (uint32_t e = ok; e; e &= e - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            const sc_ray r = { { rows[0][l], rows[1][l], rows[2][l] }, rows[3][l],
-                               { rows[4][l], rows[5][l], rows[6][l] }, rows[7][l] };
-            if (P->any) {
-                if (sp ? k->any_stats(b, &r, sp) : k->any(b, &r))
-                    top_pk_occluded(P, l);
-            } else {
-                sc_hitrec h;
-                if (sp)
-                    k->closest_stats(b, &r, &h, sp);
-                else
-                    k->closest(b, &r, &h);
-                top_pk_offer(P, it, b, l, &h);
-            }
+    const int narrow = top_pk_narrow(P, it->center, it->half);
+    const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
+    /* narrow: W-lane rows for the packet kernels */
+    float pk[8 * 16] __attribute__((aligned(64)));
+    uint32_t ok = 0;
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray w = { { P->o[0][l], P->o[1][l], P->o[2][l] }, P->tmin[l],
+                           { P->d[0][l], P->d[1][l], P->d[2][l] },
+                           P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]) };
+        sc_ray r = w;
+        if (it->inv) {
+            top_object_ray(it->inv, &w, &r);
+            if (!sc_ray_valid(&r))
+                continue;
         }
-    } else {
-        /* W-lane rows for the kernels, which load whole rows: lanes not
-         * traced repeat a traced one */
-        float pk[8 * 16] __attribute__((aligned(64)));
+        if (narrow) {
+            pk[l] = r.org[0], pk[W + l] = r.org[1], pk[2 * W + l] = r.org[2], pk[3 * W + l] = r.tmin;
+            pk[4 * W + l] = r.dir[0], pk[5 * W + l] = r.dir[1], pk[6 * W + l] = r.dir[2], pk[7 * W + l] = r.tmax;
+            ok |= 1u << l;
+        } else if (P->any) {
+            if (sp ? k->any_stats(b, &r, sp) : k->any(b, &r))
+                top_pk_occluded(P, l);
+        } else {
+            sc_hitrec h;
+            if (sp)
+                k->closest_stats(b, &r, &h, sp);
+            else
+                k->closest(b, &r, &h);
+            top_pk_offer(P, it, b, l, &h);
+        }
+    }
+    if (ok) {
+        /* the kernels load whole rows: lanes not traced repeat a traced one */
         const unsigned f = (unsigned)__builtin_ctz(ok);
-        for (unsigned k = 0; k < 8; k++)
-            for (unsigned l = 0; l < W; l++)
-                pk[k * W + l] = rows[k][ok >> l & 1 ? l : f];
+        for (unsigned l = 0; l < W; l++)
+            if (!(ok >> l & 1))
+                for (unsigned r = 0; r < 8; r++)
+                    pk[r * W + l] = pk[r * W + f];
         if (P->any) {
             int32_t occ[16];
             sc_trace_packet_lanes(b, ok, pk, W, occ, 1, sp);
@@ -210,84 +200,227 @@ SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
     }
 }
 
-/* The grown-box test of sc_top_slab for every lane and child: mask[i] the
- * lanes (of L) that reach child i, dist[i] the nearest of their entries. */
+/* The largest tcull of the active lanes: the frustum's far bound. */
+SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
+{
+    float hi = -INFINITY;
+    for (uint32_t e = P->active; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        hi = P->tcull[l] > hi ? P->tcull[l] : hi;
+    }
+    P->fr_tmax = hi;
+}
+
 #ifdef SC_TOP_VP
-/* In the ISA's vectors (SC_TOP_VP: a simd_vec.h shape of 8 or 16 lanes),
- * with the lane masks and the nearest entry from mask registers: GCC
- * vectorises the portable form's box test but not its per-lane gathering
- * of the masks, whose branches were half of the top level's time. The
- * same operations in the same order, so the same bits. */
+/* In the ISA's vectors (SC_TOP_VP: a simd_vec.h shape of 8 or 16 lanes)
+ * and the frustum in one ymm register: the operations of the portable
+ * forms below, in the same order, so the same bits. */
 #define TCAT_(a, b) a##_##b
 #define TCAT(a, b) TCAT_(a, b)
 #define TV(op) TCAT(SC_TOP_VP, op)
-SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, uint32_t L, uint32_t mask[SC_BVH_N],
-                                    float dist[SC_BVH_N])
+
+/* sc_top_pre over the lanes (non-parallel rays), and the frustum. */
+SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
 {
     enum { VW = TV(N) };
-    const TV(t) down = TV(set1)(1.0f - 0x1p-21f), up = TV(set1)(1.0f + 0x1p-21f), eps = TV(set1)(0x1p-122f);
-    const TV(t) inf = TV(set1)(INFINITY);
-    for (int i = 0; i < SC_BVH_N; i++) {
-        uint32_t m = 0;
-        float dmin = INFINITY;
-        for (unsigned h = 0; h < 16; h += VW) {
-            TV(t) a = TV(load)(P->tmin + h), b = TV(load)(P->tcull + h);
-            for (int k = 0; k < 3; k++) {
-                const TV(t) bl = TV(set1)(node->b[2 * k][i]), bh = TV(set1)(node->b[2 * k + 1][i]);
-                const TV(m) ng = TV(mask_from_bits)(P->negm[k] >> h);
-                const TV(t) nr = TV(sel)(ng, bh, bl), fr = TV(sel)(ng, bl, bh);
-                const TV(t) o = TV(load)(P->o[k] + h), rd = TV(load)(P->rd[k] + h), e = TV(load)(P->Ek[k] + h);
-                /* max/min return the second operand for a NaN: the bound stays */
-                a = TV(max)(TV(sub)(TV(mul)(TV(sub)(nr, o), rd), e), a);
-                b = TV(min)(TV(add)(TV(mul)(TV(sub)(fr, o), rd), e), b);
-            }
-            const TV(t) lo = TV(sub)(TV(mul)(a, down), eps);
-            const uint32_t hm = TV(bits)(TV(le)(lo, TV(add)(TV(mul)(b, up), eps))) & (L >> h) & ((1u << VW) - 1);
-            if (hm) {
-                m |= hm << h;
-                const float d = TV(hmin)(TV(sel)(TV(mask_from_bits)(hm), lo, inf));
-                dmin = d < dmin ? d : dmin;
-            }
+    const sc_top *T = P->T;
+    const TV(t) ga = TV(set1)(T->grow_a), gb = TV(set1)(T->grow_b), xs = TV(set1)(SC_TOP_X_SCALE);
+    const TV(t) up = TV(set1)(SC_TOP_M_UP), one = TV(set1)(1.0f), zero = TV(set1)(0.0f);
+    const TV(t) c23 = TV(set1)(0x1.0cp-23f), e123 = TV(set1)(0x1p-123f), e124 = TV(set1)(0x1p-124f),
+                e122 = TV(set1)(0x1p-122f);
+    P->negm[0] = P->negm[1] = P->negm[2] = 0;
+    for (unsigned h = 0; h < 16; h += VW) {
+        TV(t) o[3], dk[3];
+        for (int k = 0; k < 3; k++) {
+            o[k] = TV(load)(P->o[k] + h);
+            dk[k] = TV(max)(TV(abs)(TV(sub)(TV(set1)(T->lo[k]), o[k])), TV(abs)(TV(sub)(TV(set1)(T->hi[k]), o[k])));
         }
-        mask[i] = m;
-        dist[i] = dmin;
+        const TV(t) m = TV(max)(TV(max)(dk[0], dk[1]), dk[2]);
+        const TV(t) X = TV(mul)(TV(fmadd)(m, ga, gb), xs);
+        for (int k = 0; k < 3; k++) {
+            const TV(t) d = TV(load)(P->d[k] + h);
+            const TV(t) mk = TV(mul)(TV(add)(dk[k], X), up);
+            const TV(t) rd = TV(div)(one, d);
+            const TV(t) g = TV(fmadd)(TV(abs)(o[k]), c23, TV(fmadd)(mk, c23, e123));
+            const TV(t) pad = TV(fmadd)(TV(abs)(rd), g, TV(fmadd)(mk, e124, e122));
+            const TV(t) ord = TV(mul)(o[k], rd);
+            TV(store)(P->rd[k] + h, rd);
+            TV(store)(P->ordn[k] + h, TV(add)(ord, pad));
+            TV(store)(P->ordf[k] + h, TV(sub)(ord, pad));
+            P->negm[k] |= (TV(bits)(TV(lt)(d, zero)) & ((1u << VW) - 1)) << h;
+        }
     }
+    P->uniform = 1;
+    P->oct = 0;
+    for (int k = 0; k < 3; k++) {
+        const uint32_t n = P->negm[k] & lanes;
+        if (n != 0 && n != lanes)
+            P->uniform = 0;
+        P->oct |= (n != 0) << k;
+    }
+    if (!P->uniform)
+        return;
+    /* the extremes over the traced lanes (the others repeat one of them) */
+    for (int k = 0; k < 3; k++) {
+        TV(t) rlo = TV(load)(P->rd[k]), rhi = rlo, on = TV(load)(P->ordn[k]), of = TV(load)(P->ordf[k]);
+        for (unsigned h = VW; h < 16; h += VW) {
+            const TV(t) r = TV(load)(P->rd[k] + h);
+            rlo = TV(min)(rlo, r), rhi = TV(max)(rhi, r);
+            on = TV(max)(on, TV(load)(P->ordn[k] + h)), of = TV(min)(of, TV(load)(P->ordf[k] + h));
+        }
+        P->fr_rdmin[k] = TV(hmin)(rlo), P->fr_rdmax[k] = -TV(hmin)(TV(sub)(zero, rhi));
+        P->fr_onmax[k] = -TV(hmin)(TV(sub)(zero, on)), P->fr_ofmin[k] = TV(hmin)(of);
+    }
+    TV(t) tm = TV(load)(P->tmin);
+    for (unsigned h = VW; h < 16; h += VW)
+        tm = TV(min)(tm, TV(load)(P->tmin + h));
+    P->fr_tmin = TV(hmin)(tm);
+}
+
+/* The frustum test of a uniform packet against the node's 8 children (the
+ * argument of pk_frustum_node in traverse_bvh8_packet.h: a child that any
+ * lane's own test passes passes here); dist: its near bound, below every
+ * lane's entry. */
+SC_TRAVERSE_INLINE unsigned top_pk_frustum(const top_pk *P, const sc_bvh_node8 *node, float *dist)
+{
+    f32x8_t tn = f32x8_set1(P->fr_tmin), tf = f32x8_set1(P->fr_tmax);
+    for (int k = 0; k < 3; k++) {
+        const int neg = P->oct >> k & 1;
+        const f32x8_t pn = f32x8_load(node->b[2 * k + neg]), pf = f32x8_load(node->b[2 * k + 1 - neg]);
+        const f32x8_t lo = f32x8_set1(P->fr_rdmin[k]), hi = f32x8_set1(P->fr_rdmax[k]), zero = f32x8_set1(0);
+        /* a plane below 0 takes the largest rd on the near side, the smallest on the far */
+        const f32x8_t rn = f32x8_sel(f32x8_lt(pn, zero), hi, lo), rf = f32x8_sel(f32x8_lt(pf, zero), lo, hi);
+        tn = f32x8_max(f32x8_fmsub(pn, rn, f32x8_set1(P->fr_onmax[k])), tn);
+        tf = f32x8_min(f32x8_fmsub(pf, rf, f32x8_set1(P->fr_ofmin[k])), tf);
+    }
+    f32x8_store(dist, tn);
+    return f32x8_bits(f32x8_le(tn, tf));
+}
+
+/* Child i of a node against the lanes L: the lanes whose own FMA test it
+ * passes; *near: the nearest entry among them. */
+SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *node, int i, uint32_t L, float *near)
+{
+    enum { VW = TV(N) };
+    uint32_t m = 0;
+    float dmin = INFINITY;
+    for (unsigned h = 0; h < 16; h += VW) {
+        if (!((L >> h) & ((1u << VW) - 1)))
+            continue;
+        TV(t) a = TV(load)(P->tmin + h), b = TV(load)(P->tcull + h);
+        for (int k = 0; k < 3; k++) {
+            const TV(t) bl = TV(set1)(node->b[2 * k][i]), bh = TV(set1)(node->b[2 * k + 1][i]);
+            TV(t) nr = bl, fr = bh;
+            if (!P->uniform) {
+                const TV(m) ng = TV(mask_from_bits)(P->negm[k] >> h);
+                nr = TV(sel)(ng, bh, bl), fr = TV(sel)(ng, bl, bh);
+            } else if (P->oct >> k & 1) {
+                nr = bh, fr = bl;
+            }
+            a = TV(max)(TV(fmsub)(nr, TV(load)(P->rd[k] + h), TV(load)(P->ordn[k] + h)), a);
+            b = TV(min)(TV(fmsub)(fr, TV(load)(P->rd[k] + h), TV(load)(P->ordf[k] + h)), b);
+        }
+        const uint32_t hm = TV(bits)(TV(le)(a, b)) & (L >> h) & ((1u << VW) - 1);
+        if (hm) {
+            m |= hm << h;
+            const float d = TV(hmin)(TV(sel)(TV(mask_from_bits)(hm), a, TV(set1)(INFINITY)));
+            dmin = d < dmin ? d : dmin;
+        }
+    }
+    *near = dmin;
+    return m;
 }
 #undef TV
 #undef TCAT
 #undef TCAT_
 #else
-SC_TRAVERSE_INLINE void top_pk_node(const top_pk *P, const sc_bvh_node8 *node, uint32_t L, uint32_t mask[SC_BVH_N],
-                                    float dist[SC_BVH_N])
+SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
 {
-    for (int i = 0; i < SC_BVH_N; i++) {
-        float lo[16] __attribute__((aligned(64)));
-        int32_t hit[16] __attribute__((aligned(64)));
-        for (int l = 0; l < 16; l++) {
-            float a = P->tmin[l], b = P->tcull[l];
-            for (int k = 0; k < 3; k++) {
-                const float bl = node->b[2 * k][i], bh = node->b[2 * k + 1][i];
-                const float nr = P->neg[k][l] ? bh : bl, fr = P->neg[k][l] ? bl : bh;
-                const float tn = (nr - P->o[k][l]) * P->rd[k][l] - P->Ek[k][l];
-                const float tf = (fr - P->o[k][l]) * P->rd[k][l] + P->Ek[k][l];
-                a = tn > a ? tn : a;   /* a NaN (a ray in a slab's plane) keeps the bound */
-                b = tf < b ? tf : b;
-            }
-            lo[l] = a * (1.0f - 0x1p-21f) - 0x1p-122f;
-            hit[l] = lo[l] <= b * (1.0f + 0x1p-21f) + 0x1p-122f;
+    const sc_top *T = P->T;
+    P->negm[0] = P->negm[1] = P->negm[2] = 0;
+    for (unsigned l = 0; l < 16; l++) {
+        float dk[3];
+        for (int k = 0; k < 3; k++) {
+            const float dl = fabsf(T->lo[k] - P->o[k][l]), dh = fabsf(T->hi[k] - P->o[k][l]);
+            dk[k] = dl > dh ? dl : dh;
         }
-        uint32_t m = 0;
-        float dmin = INFINITY;
-        for (uint32_t e = L; e; e &= e - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            if (hit[l]) {
-                m |= 1u << l;
-                dmin = lo[l] < dmin ? lo[l] : dmin;
-            }
+        float m = dk[0] > dk[1] ? dk[0] : dk[1];
+        m = dk[2] > m ? dk[2] : m;
+        const float X = fmaf(m, T->grow_a, T->grow_b) * SC_TOP_X_SCALE;
+        for (int k = 0; k < 3; k++) {
+            const float o = P->o[k][l], mk = (dk[k] + X) * SC_TOP_M_UP, rd = 1.0f / P->d[k][l];
+            const float g = fmaf(fabsf(o), 0x1.0cp-23f, fmaf(mk, 0x1.0cp-23f, 0x1p-123f));
+            const float pad = fmaf(fabsf(rd), g, fmaf(mk, 0x1p-124f, 0x1p-122f));
+            const float ord = o * rd;
+            P->rd[k][l] = rd, P->ordn[k][l] = ord + pad, P->ordf[k][l] = ord - pad;
+            P->negm[k] |= (uint32_t)(P->d[k][l] < 0) << l;
         }
-        mask[i] = m;
-        dist[i] = dmin;
     }
+    P->uniform = 1;
+    P->oct = 0;
+    for (int k = 0; k < 3; k++) {
+        const uint32_t n = P->negm[k] & lanes;
+        if (n != 0 && n != lanes)
+            P->uniform = 0;
+        P->oct |= (n != 0) << k;
+    }
+    if (!P->uniform)
+        return;
+    P->fr_tmin = INFINITY;
+    for (int k = 0; k < 3; k++)
+        P->fr_rdmin[k] = P->fr_ofmin[k] = INFINITY, P->fr_rdmax[k] = P->fr_onmax[k] = -INFINITY;
+    for (unsigned l = 0; l < 16; l++) {
+        for (int k = 0; k < 3; k++) {
+            const float r = P->rd[k][l];
+            P->fr_rdmin[k] = r < P->fr_rdmin[k] ? r : P->fr_rdmin[k];
+            P->fr_rdmax[k] = r > P->fr_rdmax[k] ? r : P->fr_rdmax[k];
+            P->fr_onmax[k] = P->ordn[k][l] > P->fr_onmax[k] ? P->ordn[k][l] : P->fr_onmax[k];
+            P->fr_ofmin[k] = P->ordf[k][l] < P->fr_ofmin[k] ? P->ordf[k][l] : P->fr_ofmin[k];
+        }
+        P->fr_tmin = P->tmin[l] < P->fr_tmin ? P->tmin[l] : P->fr_tmin;
+    }
+}
+
+SC_TRAVERSE_INLINE unsigned top_pk_frustum(const top_pk *P, const sc_bvh_node8 *node, float *dist)
+{
+    unsigned mask = 0;
+    for (int i = 0; i < SC_BVH_N; i++) {
+        float tn = P->fr_tmin, tf = P->fr_tmax;
+        for (int k = 0; k < 3; k++) {
+            const int neg = P->oct >> k & 1;
+            const float pn = node->b[2 * k + neg][i], pf = node->b[2 * k + 1 - neg][i];
+            const float rn = pn < 0 ? P->fr_rdmax[k] : P->fr_rdmin[k], rf = pf < 0 ? P->fr_rdmin[k] : P->fr_rdmax[k];
+            const float a = fmaf(pn, rn, -P->fr_onmax[k]), b = fmaf(pf, rf, -P->fr_ofmin[k]);
+            tn = a > tn ? a : tn;
+            tf = b < tf ? b : tf;
+        }
+        dist[i] = tn;
+        mask |= (unsigned)(tn <= tf) << i;
+    }
+    return mask;
+}
+
+SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *node, int i, uint32_t L, float *near)
+{
+    uint32_t m = 0;
+    float dmin = INFINITY;
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        float a = P->tmin[l], b = P->tcull[l];
+        for (int k = 0; k < 3; k++) {
+            const int neg = P->negm[k] >> l & 1;
+            const float nr = node->b[2 * k + neg][i], fr = node->b[2 * k + 1 - neg][i];
+            const float tn = fmaf(nr, P->rd[k][l], -P->ordn[k][l]), tf = fmaf(fr, P->rd[k][l], -P->ordf[k][l]);
+            a = tn > a ? tn : a;
+            b = tf < b ? tf : b;
+        }
+        if (a <= b) {
+            m |= 1u << l;
+            dmin = a < dmin ? a : dmin;
+        }
+    }
+    *near = dmin;
+    return m;
 }
 #endif
 
@@ -301,7 +434,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     if (!lanes)
         return;
     top_pk P;
-    P.T = T, P.W = W, P.any = any, P.st = st, P.active = lanes;
+    P.T = T, P.W = W, P.any = any, P.st = st;
     P.occluded = any ? out : NULL;
     /* every lane of the rows, traced or not, so that the loops below run
      * over all 16; the lanes not traced repeat the first traced one */
@@ -311,52 +444,56 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         for (int k = 0; k < 3; k++)
             P.o[k][l] = rows[k * W + src], P.d[k][l] = rows[(4 + k) * W + src];
         P.tmin[l] = rows[3 * W + src], P.tmax[l] = rows[7 * W + src];
-    }
-    for (uint32_t e = lanes; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        if (any) {
-            P.occluded[l] = 0;
-        } else {
-            sc_top_miss(P.tmax[l], &P.best[l]);
-        }
-    }
-    top_pk_spread(&P, lanes);
-    if (!top_pk_narrow(&P, T->center, T->half)) {
-        /* wide against the whole scene: lane by lane through the single-ray top level */
-        for (uint32_t e = lanes; e; e &= e - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            const sc_ray r = { { P.o[0][l], P.o[1][l], P.o[2][l] }, P.tmin[l],
-                               { P.d[0][l], P.d[1][l], P.d[2][l] }, P.tmax[l] };
-            if (any)
-                P.occluded[l] = top_any(T, &r, st);
-            else
-                top_closest(T, &r, &P.best[l], st);
-        }
-        goto done;
-    }
-    /* sc_top_grow and sc_top_ray_setup, lane by lane */
-    P.negm[0] = P.negm[1] = P.negm[2] = 0;
-    for (int l = 0; l < 16; l++) {
-        double m = 0;
-        for (int k = 0; k < 3; k++) {
-            const double dl = fabs((double)T->lo[k] - P.o[k][l]), dh = fabs((double)T->hi[k] - P.o[k][l]);
-            m = dl > m ? dl : m;
-            m = dh > m ? dh : m;
-        }
-        const double E = sc_top_growth(T, m);
-        for (int k = 0; k < 3; k++) {
-            P.rd[k][l] = 1.0f / P.d[k][l];
-            P.Ek[k][l] = sc_top_ek(E, P.rd[k][l]);
-            P.neg[k][l] = signbit(P.d[k][l]) != 0;
-            P.negm[k] |= (uint32_t)P.neg[k][l] << l;
-        }
         P.tcull[l] = P.tmax[l];
     }
+    /* lanes parallel to an axis, and every lane of a packet wide against
+     * the whole scene: one by one through the single-ray top level */
+    uint32_t single = 0;
+    for (uint32_t e = lanes; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        if (any)
+            P.occluded[l] = 0;
+        else
+            sc_top_miss(P.tmax[l], &P.best[l]);
+        const sc_ray r = { { P.o[0][l], P.o[1][l], P.o[2][l] }, P.tmin[l],
+                           { P.d[0][l], P.d[1][l], P.d[2][l] }, P.tmax[l] };
+        single |= (uint32_t)sc_ray_parallel(&r) << l;
+    }
+    uint32_t pl = lanes & ~single;
+    if (pl) {
+        top_pk_spread(&P, pl);
+        if (!top_pk_narrow(&P, T->center, T->half))
+            single = lanes, pl = 0;
+    }
+    for (uint32_t e = single; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray r = { { P.o[0][l], P.o[1][l], P.o[2][l] }, P.tmin[l],
+                           { P.d[0][l], P.d[1][l], P.d[2][l] }, P.tmax[l] };
+        if (any)
+            P.occluded[l] = top_any(T, &r, st);
+        else
+            top_closest(T, &r, &P.best[l], st);
+    }
+    if (!pl)
+        goto done;
+    if (single) {
+        /* the lanes left repeat one of them, for the frustum's extremes */
+        const unsigned f = (unsigned)__builtin_ctz(pl);
+        for (unsigned l = 0; l < 16; l++)
+            if (!(pl >> l & 1)) {
+                for (int k = 0; k < 3; k++)
+                    P.o[k][l] = P.o[k][f], P.d[k][l] = P.d[k][f];
+                P.tmin[l] = P.tmin[f], P.tmax[l] = P.tcull[l] = P.tmax[f];
+            }
+    }
+    P.active = pl;
+    top_pk_setup(&P, pl);
+    top_pk_far(&P);
     /* Each node pushes at most its 8 children, as in the single-ray walk,
      * so the single-ray stack bound holds. */
     top_pk_entry stack[SC_TRACE_STACK];
     int sp = 0;
-    stack[sp++] = (top_pk_entry){ 0, lanes };
+    stack[sp++] = (top_pk_entry){ 0, pl };
     while (sp && P.active) {
         const top_pk_entry e = stack[--sp];
         const uint32_t L = e.lanes & P.active;
@@ -364,19 +501,27 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             continue;
         if (sc_ref_is_leaf(e.ref)) {
             top_pk_visit(&P, (uint32_t)(e.ref & 0xffffffffu), L);
+            if (!any)
+                top_pk_far(&P);
             continue;
         }
         const sc_bvh_node8 *node = &T->nodes[e.ref];
         if (st)
             st->nodes++;
+        unsigned cand = 0xff;
+        float fd[SC_BVH_N] __attribute__((aligned(32)));
+        if (P.uniform)
+            cand = top_pk_frustum(&P, node, fd);
         uint32_t cl[SC_BVH_N];
         float cd[SC_BVH_N];
-        top_pk_node(&P, node, L, cl, cd);
-        /* the children some lane reached, far to near: the nearest is popped first */
         int idx[SC_BVH_N], n = 0;
-        for (int i = 0; i < SC_BVH_N; i++) {
-            if (!cl[i])
+        for (; cand; cand &= cand - 1) {
+            const int i = __builtin_ctz(cand);
+            float near;
+            if (!node->child[i] || !(cl[i] = top_pk_child(&P, node, i, L, &near)))
                 continue;
+            cd[i] = P.uniform ? fd[i] : near;
+            /* far to near: the nearest is popped first */
             int j = n++;
             while (j > 0 && cd[idx[j - 1]] < cd[i]) {
                 idx[j] = idx[j - 1];
