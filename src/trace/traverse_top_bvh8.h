@@ -4,33 +4,13 @@
  *   SC_TOP_TABLE   the level's own sc_trace_kernels table, whose
  *                  single-ray kernels trace the items' BVHs.
  * A non-parallel ray takes the level's FMA node test with the instance
- * growth folded into its padding (sc_top_pre, top_ctx_init); a parallel ray the grown
- * boxes of sc_top_slab. Items are visited near first; of hits at equal t
- * the smaller (inst, geom, prim) wins, so the answer does not depend on the
- * order. */
+ * growth folded into its padding (sc_top_pre, top_ctx_init); a parallel
+ * ray the grown boxes of sc_top_slab. A closest-hit ray visits items near
+ * first, an any-hit ray in slot order; of hits at equal t the smaller
+ * (inst, geom, prim) wins, so the answer does not depend on the order. */
 #include "trace_top.h"
 
 #ifdef SC_X86_INLINE
-/* sc_top_object_ray with the four columns in ymm registers: the same
- * double operations in the same order (no FMA), so the same bits. The
- * stores of four lanes write 0 into tmin and tmax, which are set after. */
-SC_X86_INLINE void top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
-{
-    const __m256d c0 = _mm256_loadu_pd(inv), c1 = _mm256_loadu_pd(inv + 4), c2 = _mm256_loadu_pd(inv + 8),
-                  c3 = _mm256_loadu_pd(inv + 12);
-    const __m256d p = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c0, _mm256_set1_pd(r->org[0])),
-                                                                _mm256_mul_pd(c1, _mm256_set1_pd(r->org[1]))),
-                                                  _mm256_mul_pd(c2, _mm256_set1_pd(r->org[2]))),
-                                    c3);
-    const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c0, _mm256_set1_pd(r->dir[0])),
-                                                  _mm256_mul_pd(c1, _mm256_set1_pd(r->dir[1]))),
-                                    _mm256_mul_pd(c2, _mm256_set1_pd(r->dir[2])));
-    _mm_storeu_ps(o->org, _mm256_cvtpd_ps(p));
-    _mm_storeu_ps(o->dir, _mm256_cvtpd_ps(v));
-    o->tmin = r->tmin;
-    o->tmax = r->tmax;
-}
-
 /* sc_top_pre with the three axes in one xmm register (lane 3 ignored), as
  * ctx_init_fast does for a BVH's own rays: the same operations, so the
  * same bits, without the stores and reloads of the struct. */
@@ -61,11 +41,6 @@ SC_X86_INLINE void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
     ctx_set_rows(c, r);
 }
 #else
-static inline void top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
-{
-    sc_top_object_ray(inv, r, o);
-}
-
 static inline void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
 {
     sc_ray_pre pre;
@@ -85,7 +60,7 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
         return 0;
     sc_ray r = *ray;
     if (it->inv) {
-        top_object_ray(it->inv, ray, &r);
+        sc_top_object_ray(it->inv, ray, &r);
         if (!sc_ray_valid(&r))
             return 0;
     }

@@ -98,7 +98,7 @@ SC_TRAVERSE_INLINE void top_pk_occluded(top_pk *P, unsigned l)
 }
 
 /* The lanes L that reached item `item`: each lane's object ray
- * (top_object_ray, as the single-ray walk makes it), traced at once
+ * (sc_top_object_ray, as the single-ray walk makes it), traced at once
  * through the single-ray kernel where the packet is wide next to the item,
  * else gathered into one packet of object rays. */
 SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
@@ -123,7 +123,7 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
                            P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]) };
         sc_ray r = w;
         if (it->inv) {
-            top_object_ray(it->inv, &w, &r);
+            sc_top_object_ray(it->inv, &w, &r);
             if (!sc_ray_valid(&r))
                 continue;
         }
