@@ -735,6 +735,143 @@ static void test_refit(void **state)
 
 /* ---- bad arguments --------------------------------------------------------- */
 
+/* The top level's growth (trace_top.h): an instance whose transform has a
+ * condition number of 10^3 (a scale after the rotation), and rays from
+ * 10^4 of its sizes away that
+ * pass just outside its world box beside the vertex that bounds it. The
+ * rounded object ray lands up to about u kappa D from the world ray, far
+ * beyond the slab test's own padding (2u D), so an instance whose object
+ * ray hits is kept only through the growth. Every answer, single rays and
+ * packets of 16, must be the object scene's for the object ray
+ * (sc_accel_instance_ray); enough object rays hit for that to mean
+ * something (with the growth set to 0 the single rays fail here). */
+static void test_growth(void **state)
+{
+    (void)state;
+    mesh box;
+    grid_box(&box, 2, 0);
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    sc_accel *obj, *world;
+    const sc_mesh_view v = { box.pos, box.nv, box.idx, box.nt, 0, 0 };
+    assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+    assert_int_equal(sc_accel_attach_mesh(obj, &v, SC_ACCEL_COPY, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(obj), SC_OK);
+    /* M = S R, the scale after the rotation: the object ray's rounding in
+     * the object's axes comes back scaled by S, up to kappa u D in world */
+    float x[12];
+    const double S[3] = { 1, 1e3, rnd_in(30, 1e3) };
+    random_xfm(x, 1.0, 1.0, 0, 10.0);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            x[4 * i + j] = (float)(x[4 * i + j] * S[i]);
+    assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+    assert_int_equal(sc_accel_attach_instance(world, obj, x, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(world), SC_OK);
+    /* the world vertices, the box's extent and the vertices that bound it */
+    double (*wv)[3] = malloc(box.nv * sizeof *wv), lo[3], hi[3];
+    size_t arg[3][2] = { { 0, 0 }, { 0, 0 }, { 0, 0 } };
+    for (uint32_t i = 0; i < box.nv; i++) {
+        const double p[3] = { box.pos[3 * i], box.pos[3 * i + 1], box.pos[3 * i + 2] };
+        xfm_point(x, p, wv[i]);
+        for (int k = 0; k < 3; k++) {
+            if (i == 0 || wv[i][k] < lo[k])
+                lo[k] = wv[i][k], arg[k][0] = i;
+            if (i == 0 || wv[i][k] > hi[k])
+                hi[k] = wv[i][k], arg[k][1] = i;
+        }
+    }
+    double ext = 0;
+    for (int k = 0; k < 3; k++)
+        ext = fmax(ext, hi[k] - lo[k]);
+    const double D = 1e4 * ext;
+    double reach[3];
+    for (int k = 0; k < 3; k++)
+        reach[k] = 0x1p-23 * D * S[k];
+    enum { N = 4096 };
+    sc_ray *rays = malloc(N * sizeof *rays);
+    sc_hitrec *want = malloc(N * sizeof *want);
+    int32_t *want_occ = malloc(N * sizeof *want_occ);
+    size_t hits = 0;
+    double d[3] = { 0, 0, 1 }, dl = 1, P0[3] = { 0, 0, 0 };
+    for (size_t r = 0; r < N; r++) {
+        /* 16 rays from one origin (a packet narrow enough to walk the top
+         * tree together) past one bounding vertex */
+        const size_t grp = r / 16;
+        const int k = (int)(grp % 3), side = (int)(grp / 3 % 2);
+        const double *V = wv[arg[k][side]];
+        if (r % 16 == 0) {
+            /* a direction nearly along the face */
+            dl = 0;
+            for (int a = 0; a < 3; a++)
+                d[a] = a == k ? rnd_in(-1e-4, 1e-4) : rnd_in(-1, 1), dl += d[a] * d[a];
+            dl = sqrt(dl);
+        }
+        /* a point beside V, outside the box's face by up to `reach`; the
+         * rays of one packet within a thousandth of that of each other */
+        double P[3] = { V[0], V[1], V[2] };
+        if (r % 16 == 0) {
+            P0[k] = (side ? 1 : -1) * rnd() * reach[k];
+            P0[(k + 1) % 3] = rnd_in(-1, 1) * reach[(k + 1) % 3], P0[(k + 2) % 3] = rnd_in(-1, 1) * reach[(k + 2) % 3];
+        }
+        for (int a = 0; a < 3; a++)
+            P[a] += P0[a] + rnd_in(-1e-3, 1e-3) * reach[a];
+        sc_ray q = { { 0, 0, 0 }, 0, { 0, 0, 0 }, INFINITY };
+        for (int a = 0; a < 3; a++)
+            q.org[a] = (float)(V[a] - D * d[a] / dl);
+        for (int a = 0; a < 3; a++)
+            q.dir[a] = (float)(2 * (P[a] - q.org[a]));
+        rays[r] = q;
+        sc_ray o;
+        assert_int_equal(sc_accel_instance_ray(world, 0, &q, &o), SC_OK);
+        int occ;
+        assert_int_equal(sc_accel_closest(obj, &o, &want[r], NULL), SC_OK);
+        assert_int_equal(sc_accel_any(obj, &o, &occ, NULL), SC_OK);
+        want_occ[r] = occ;
+        hits += want[r].prim != SC_HITREC_MISS;
+        sc_hitrec g;
+        assert_int_equal(sc_accel_closest(world, &q, &g, NULL), SC_OK);
+        assert_int_equal(sc_accel_any(world, &q, &occ, NULL), SC_OK);
+        if (g.prim != want[r].prim || memcmp(&g.t, &want[r].t, sizeof g.t) || occ != want_occ[r])
+            fail_msg("ray %zu: through the instance prim %u t %a occluded %d, its object ray prim %u t %a "
+                     "occluded %d", r, g.prim, g.t, occ, want[r].prim, want[r].t, want_occ[r]);
+    }
+    print_message("%zu of %d object rays hit beside the world box\n", hits, N);
+    assert_true(hits >= N / 64);
+    /* the same rays as packets of 16, on every ISA level */
+    const sc_isa start = sc_isa_active();
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        for (size_t base = 0; base < N; base += 16) {
+            sc_ray_packet16 p;
+            int32_t valid[16], o16[16];
+            for (unsigned i = 0; i < 16; i++) {
+                const sc_ray *q = &rays[base + i];
+                const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin, q->dir[0], q->dir[1], q->dir[2], q->tmax };
+                for (unsigned c = 0; c < 8; c++)
+                    (&p.ox[0])[16 * c + i] = f[c];
+                valid[i] = 1;
+            }
+            sc_hit_packet16 h;
+            assert_int_equal(sc_accel_closest16(world, valid, &p, &h, NULL), SC_OK);
+            assert_int_equal(sc_accel_any16(world, valid, &p, o16, NULL), SC_OK);
+            for (unsigned i = 0; i < 16; i++)
+                if (h.prim[i] != want[base + i].prim || memcmp(&h.t[i], &want[base + i].t, sizeof h.t[i]) ||
+                    o16[i] != want_occ[base + i])
+                    fail_msg("%s packet ray %zu: prim %u t %a occluded %d, its object ray prim %u t %a occluded %d",
+                             sc_isa_name((sc_isa)isa), base + i, h.prim[i], h.t[i], o16[i], want[base + i].prim,
+                             want[base + i].t, want_occ[base + i]);
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    sc_accel_release(world);
+    sc_accel_release(obj);
+    free(rays), free(want), free(want_occ), free(wv);
+    mesh_free(&box);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -1045,6 +1182,7 @@ int main(void)
         cmocka_unit_test(test_instances),
         cmocka_unit_test(test_no_holes),
         cmocka_unit_test(test_packets),
+        cmocka_unit_test(test_growth),
         cmocka_unit_test(test_refit),
         cmocka_unit_test(test_errors),
     };
