@@ -12,6 +12,7 @@
 #ifndef SPHERECULL_TRACE_RAY_SETUP_H
 #define SPHERECULL_TRACE_RAY_SETUP_H
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -49,14 +50,14 @@ typedef struct sc_ray_pre {
     float xK, xc0;                 /* exact test: edge bound E = xK (hP + hQ) + xc0 */
 } sc_ray_pre;
 
+/* Without branches (& and | on the compares, |x| <= FLT_MAX for finite):
+ * the top level checks every object ray it makes, one per instance visit. */
 static inline int sc_ray_valid(const sc_ray *r)
 {
+    int ok = (r->tmin >= 0) & (r->tmax == r->tmax);
     for (int k = 0; k < 3; k++)
-        if (!(fabsf(r->org[k]) < SC_MAX_ORIGIN) || !isfinite(r->dir[k]))
-            return 0;
-    if (r->dir[0] == 0 && r->dir[1] == 0 && r->dir[2] == 0)
-        return 0;
-    return r->tmin >= 0 && !isnan(r->tmax);
+        ok &= (fabsf(r->org[k]) < SC_MAX_ORIGIN) & (fabsf(r->dir[k]) <= FLT_MAX);
+    return ok & ((r->dir[0] != 0) | (r->dir[1] != 0) | (r->dir[2] != 0));
 }
 
 /* 1 iff the ray must take the parallel node test. */
