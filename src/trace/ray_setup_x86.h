@@ -48,6 +48,17 @@ SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
     c->xc0 = _mm256_set1_ps(p->xc0);
 }
 
+/* The node test's per-ray constants from the three axes in xmm lanes 0-2. */
+SC_X86_INLINE void ctx_set_slab(trace_ctx *c, __m128 rd, __m128 ordn, __m128 ordf, float tmin)
+{
+#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
+    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
+    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
+    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
+#undef BC
+    c->tmin = _mm256_set1_ps(tmin);
+}
+
 /* The set-up of a non-parallel ray (every kernel with a known octant):
  * sc_ray_precompute's arithmetic with the three axes in one xmm register,
  * one divide instead of three and no stores and reloads of the struct. The
@@ -72,12 +83,7 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
                                     _mm_fmadd_ps(m, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
     const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
-#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
-    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
-    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
-    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
-#undef BC
-    c->tmin = _mm256_set1_ps(r->tmin);
+    ctx_set_slab(c, rd, ordn, ordf, r->tmin);
     if (TEST == SC_TRI_EXACT) {
         const float mk[3] = { m[0], m[1], m[2] };
         float xK, xc0;

@@ -32,12 +32,7 @@ SC_X86_INLINE void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
                                     _mm_fmadd_ps(mk, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
     const __m128 ord = _mm_mul_ps(o, rd);
     const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
-#define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
-    c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
-    c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
-    c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
-#undef BC
-    c->tmin = _mm256_set1_ps(r->tmin);
+    ctx_set_slab(c, rd, ordn, ordf, r->tmin);
     ctx_set_rows(c, r);
 }
 #else

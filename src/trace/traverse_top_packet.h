@@ -211,6 +211,20 @@ SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
     P->fr_tmax = hi;
 }
 
+/* Whether every lane of `lanes` is in one octant (P->oct; from P->negm). */
+SC_TRAVERSE_INLINE int top_pk_octant(top_pk *P, uint32_t lanes)
+{
+    P->uniform = 1;
+    P->oct = 0;
+    for (int k = 0; k < 3; k++) {
+        const uint32_t n = P->negm[k] & lanes;
+        if (n != 0 && n != lanes)
+            P->uniform = 0;
+        P->oct |= (n != 0) << k;
+    }
+    return P->uniform;
+}
+
 #ifdef SC_TOP_VP
 /* In the ISA's vectors (SC_TOP_VP: a simd_vec.h shape of 8 or 16 lanes)
  * and the frustum in one ymm register: the operations of the portable
@@ -250,15 +264,7 @@ SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
             P->negm[k] |= (TV(bits)(TV(lt)(d, zero)) & ((1u << VW) - 1)) << h;
         }
     }
-    P->uniform = 1;
-    P->oct = 0;
-    for (int k = 0; k < 3; k++) {
-        const uint32_t n = P->negm[k] & lanes;
-        if (n != 0 && n != lanes)
-            P->uniform = 0;
-        P->oct |= (n != 0) << k;
-    }
-    if (!P->uniform)
+    if (!top_pk_octant(P, lanes))
         return;
     /* the extremes over the traced lanes (the others repeat one of them) */
     for (int k = 0; k < 3; k++) {
@@ -356,15 +362,7 @@ SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
             P->negm[k] |= (uint32_t)(P->d[k][l] < 0) << l;
         }
     }
-    P->uniform = 1;
-    P->oct = 0;
-    for (int k = 0; k < 3; k++) {
-        const uint32_t n = P->negm[k] & lanes;
-        if (n != 0 && n != lanes)
-            P->uniform = 0;
-        P->oct |= (n != 0) << k;
-    }
-    if (!P->uniform)
+    if (!top_pk_octant(P, lanes))
         return;
     P->fr_tmin = INFINITY;
     for (int k = 0; k < 3; k++)
