@@ -26,7 +26,7 @@
 typedef struct accel_inst {
     sc_accel *obj;
     float xfm[12];
-    double inv[16];              /* world to object, M^-1 | -M^-1 T by columns, each padded with a 0 (trace_top.h) */
+    double inv[12];              /* world to object: M^-1 and -M^-1 T */
     float cof[9];                /* cof(M) = det(M) M^-T, row-major: normals to world */
     double kappa;                /* ||M||_F ||M^-1||_F >= the condition number */
     double radius;               /* of its world box around T */
@@ -167,7 +167,7 @@ static int inst_set(accel_inst *in, const float xfm[12])
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) {
             double v = c[j][i] / det;   /* M^-1 = cof(M)^T / det */
-            in->inv[4 * j + i] = v;
+            in->inv[4 * i + j] = v;
             nm += m[i][j] * m[i][j];
             ni += v * v;
             in->cof[3 * i + j] = (float)c[i][j];
@@ -176,7 +176,7 @@ static int inst_set(accel_inst *in, const float xfm[12])
         }
     }
     for (int i = 0; i < 3; i++)
-        in->inv[12 + i] = -(in->inv[i] * t[0] + in->inv[4 + i] * t[1] + in->inv[8 + i] * t[2]);
+        in->inv[4 * i + 3] = -(in->inv[4 * i] * t[0] + in->inv[4 * i + 1] * t[1] + in->inv[4 * i + 2] * t[2]);
     in->kappa = sqrt(nm) * sqrt(ni);
     if (!isfinite(in->kappa))
         return 0;

@@ -132,6 +132,32 @@ SC_TRACE_INLINE void sc_ray_precompute_shear(const sc_ray *r, sc_ray_pre *p)
     p->Sz = 1.0f / d[kz];
 }
 
+/* The padded offsets b of the FMA slab test (node_bvh8_slab.h) on one
+ * axis: origin o, rd = fl(1/d), m at least (1 - u) times the largest
+ * |plane - o| of the tree on that axis (M). The pad is in float and mostly
+ * off the divide's path: with 5 % slack for the roundings of these few
+ * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and then
+ * fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny terms are
+ * normal numbers (MIN = 2^-126) so that they hold with gradual underflow
+ * and with MXCSR FTZ|DAZ (subnormal results and operands read as 0) alike:
+ *  - 2^-123 = 8 MIN in g, multiplied by |rd| (up to 1e18): a plane or
+ *    origin coordinate that DAZ reads as 0 (< MIN each), and g's own
+ *    underflow (< MIN), each shift a distance by < MIN |rd|;
+ *  - m 2^-124: an rd that underflows (|d| > 2^126) is off by < M 2^-126 in
+ *    distance, flushed to 0 by FTZ entirely (|tau| <= M 2^-126);
+ *  - 2^-122 = 16 MIN: underflow of o rd, of the pad, of fl(o rd) + E and
+ *    of the slab FMA itself, < MIN each.
+ * (tests/test_slab.c checks it against MPFR in both modes, on coordinates
+ * near 1e-40.) The SIMD set-ups compute the same operations. */
+SC_TRACE_INLINE void sc_slab_offsets(float o, float rd, float m, float *near, float *far)
+{
+    const float g = fmaf(fabsf(o), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
+    const float pad = fmaf(fabsf(rd), g, fmaf(m, 0x1p-124f, 0x1p-122f));
+    const float ord = o * rd;
+    *near = ord + pad;
+    *far = ord - pad;
+}
+
 /* root_lo/root_hi: the BVH's root box (ignored when it has none). */
 SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const float root_lo[3],
                                      const float root_hi[3])
@@ -145,29 +171,9 @@ SC_TRACE_INLINE void sc_ray_precompute(const sc_ray *r, sc_ray_pre *p, const flo
         if (fabsf(d) < SC_MIN_RCP_INPUT)
             d = copysignf(SC_MIN_RCP_INPUT, d);
         p->rd[k] = 1.0f / d;
-        /* The pad, in float and mostly off the divide's path: with
-         * m >= M(1 - u) and 5 % slack for the roundings of these few
-         * operations, E >= 2u |r| M (1 + 3u) + 2.02u |fl(o rd)| + tiny, and
-         * then fl(fl(o rd) + E) >= o rd + 2u |r| M (1 + 3u) + tiny. The tiny
-         * terms are normal numbers (MIN = 2^-126) so that they hold with
-         * gradual underflow and with MXCSR FTZ|DAZ (subnormal results and
-         * operands read as 0) alike:
-         *  - 2^-123 = 8 MIN in g, multiplied by |rd| (up to 1e18): a plane
-         *    or origin coordinate that DAZ reads as 0 (< MIN each), and g's
-         *    own underflow (< MIN), each shift a distance by < MIN |rd|;
-         *  - m 2^-124: an rd that underflows (|d| > 2^126) is off by < M 2^-126
-         *    in distance, flushed to 0 by FTZ entirely (|tau| <= M 2^-126);
-         *  - 2^-122 = 16 MIN: underflow of o rd, of the pad, of fl(o rd) + E
-         *    and of the slab FMA itself, < MIN each.
-         * (tests/test_slab.c checks it against MPFR in both modes, on
-         * coordinates near 1e-40.) */
-        float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
+        const float m = sc_fmax(fabsf(root_lo[k] - p->org[k]), fabsf(root_hi[k] - p->org[k]));
         mk[k] = m;
-        float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(m, 0x1.0cp-23f, 0x1p-123f));
-        float pad = fmaf(fabsf(p->rd[k]), g, fmaf(m, 0x1p-124f, 0x1p-122f));
-        float ord = p->org[k] * p->rd[k];
-        p->ord_near[k] = ord + pad;
-        p->ord_far[k] = ord - pad;
+        sc_slab_offsets(p->org[k], p->rd[k], m, &p->ord_near[k], &p->ord_far[k]);
         int neg = signbit(p->rd[k]) != 0;
         p->near_row[k] = 2 * k + neg;
         p->far_row[k] = 2 * k + 1 - neg;

@@ -48,6 +48,28 @@ SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
     c->xc0 = _mm256_set1_ps(p->xc0);
 }
 
+/* Per axis in xmm lanes, the larger distance of o from a box's planes
+ * (lo and hi: three floats each, a fourth readable). */
+SC_X86_INLINE __m128 box_reach4(const float *lo, const float *hi, __m128 o)
+{
+    const __m128 sgn = _mm_set1_ps(-0.0f);
+    return _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(lo), o)),
+                      _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(hi), o)));
+}
+
+/* sc_slab_offsets on the axes in xmm lanes. */
+SC_X86_INLINE void slab_offsets4(__m128 o, __m128 rd, __m128 m, __m128 *ordn, __m128 *ordf)
+{
+    const __m128 sgn = _mm_set1_ps(-0.0f);
+    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
+                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-123f)));
+    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
+                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
+    const __m128 ord = _mm_mul_ps(o, rd);
+    *ordn = _mm_add_ps(ord, pad);
+    *ordf = _mm_sub_ps(ord, pad);
+}
+
 /* The node test's per-ray constants from the three axes in xmm lanes 0-2. */
 SC_X86_INLINE void ctx_set_slab(trace_ctx *c, __m128 rd, __m128 ordn, __m128 ordf, float tmin)
 {
@@ -75,14 +97,9 @@ SC_X86_INLINE void ctx_init_fast(trace_ctx *c, const sc_ray *r, const sc_bvh *bv
     const __m128 sgn = _mm_set1_ps(-0.0f);
     const __m128 o = _mm_loadu_ps(r->org), d = _mm_loadu_ps(r->dir);
     const __m128 rd = _mm_div_ps(_mm_set1_ps(1.0f), d);
-    const __m128 ord = _mm_mul_ps(o, rd);
-    const __m128 m = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_lo), o)),
-                                _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(bvh->root_hi), o)));
-    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
-                                  _mm_fmadd_ps(m, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-123f)));
-    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
-                                    _mm_fmadd_ps(m, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
-    const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
+    const __m128 m = box_reach4(bvh->root_lo, bvh->root_hi, o);
+    __m128 ordn, ordf;
+    slab_offsets4(o, rd, m, &ordn, &ordf);
     ctx_set_slab(c, rd, ordn, ordf, r->tmin);
     if (TEST == SC_TRI_EXACT) {
         const float mk[3] = { m[0], m[1], m[2] };

@@ -32,8 +32,7 @@
 
 typedef struct sc_top_item {
     const sc_bvh *const *bvh;    /* where the item's BVH is kept (read at trace time); *bvh may be NULL */
-    const double *inv;           /* 16: world to object, column-major 3x4, each column padded with a
-                                  * 0 to four (one 256-bit load); NULL: no transform */
+    const double *inv;           /* 12: world to object, row-major 3x4; NULL: no transform */
     const float *cof;            /* 9: cof(M), row-major: object normals to world */
     uint32_t inst;               /* hit.inst of its hits (SC_INVALID_ID without a transform) */
     float center[3], half;       /* its world box: centre, half diagonal (packets' coherence test) */
@@ -45,7 +44,7 @@ typedef struct sc_top {
     float lo[3], hi[3];          /* the top tree's box */
     float center[3], half;       /* the same box: centre, half diagonal (packets' coherence test) */
     double kappa, radius;
-    float grow_a, grow_b;        /* E <= grow_a m + grow_b in float (sc_top_growth_f) */
+    float grow_a, grow_b;        /* E <= grow_a m + grow_b in float (sc_top_growth_consts) */
 } sc_top;
 
 /* A miss of a ray ending at tmax: what the top level starts from. */
@@ -84,19 +83,17 @@ static inline float sc_top_ek(double E, float rd)
     return (float)(E * fabs((double)rd) * (1 + 0x1p-20));
 }
 
-/* Component i of the world-to-object transform (column-major, sc_top_item)
- * on a point and on a direction, in double, rounded once (the object ray's
- * components). Column-major so that a SIMD form can take a column at a
- * time; one in 256-bit doubles (the same operations in the same order)
- * measured 2-3 % slower than this on instanced scenes, so every level
- * calls this one. */
-static inline float sc_top_xfm_point(const double *inv, int i, double x, double y, double z)
+/* Row `row` of the world-to-object transform on a point and on a
+ * direction, in double, rounded once (the object ray's components). Every
+ * level calls these: a form in 256-bit doubles, a column of the inverse a
+ * register, measured 2-3 % slower on instanced scenes (docs/scenes.md). */
+static inline float sc_top_xfm_point(const double *row, double x, double y, double z)
 {
-    return (float)(((inv[i] * x + inv[4 + i] * y) + inv[8 + i] * z) + inv[12 + i]);
+    return (float)(row[0] * x + row[1] * y + row[2] * z + row[3]);
 }
-static inline float sc_top_xfm_dir(const double *inv, int i, double x, double y, double z)
+static inline float sc_top_xfm_dir(const double *row, double x, double y, double z)
 {
-    return (float)((inv[i] * x + inv[4 + i] * y) + inv[8 + i] * z);
+    return (float)(row[0] * x + row[1] * y + row[2] * z);
 }
 
 /* E of the comment above for ray r; m is returned for the set-up. */
@@ -116,8 +113,8 @@ static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out
 static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
 {
     for (int i = 0; i < 3; i++) {
-        o->org[i] = sc_top_xfm_point(inv, i, r->org[0], r->org[1], r->org[2]);
-        o->dir[i] = sc_top_xfm_dir(inv, i, r->dir[0], r->dir[1], r->dir[2]);
+        o->org[i] = sc_top_xfm_point(inv + 4 * i, r->org[0], r->org[1], r->org[2]);
+        o->dir[i] = sc_top_xfm_dir(inv + 4 * i, r->dir[0], r->dir[1], r->dir[2]);
     }
     o->tmin = r->tmin;
     o->tmax = r->tmax;
@@ -191,6 +188,30 @@ static inline void sc_top_normal(const float *cof, float ng[3])
     const float n[3] = { ng[0], ng[1], ng[2] };
     for (int i = 0; i < 3; i++)
         ng[i] = cof[3 * i] * n[0] + cof[3 * i + 1] * n[1] + cof[3 * i + 2] * n[2];
+}
+
+/* Hit h of item it's BVH b (its object-space hit) offered to best: its
+ * ids mapped, its instance set, and when it wins, its normal taken to
+ * world space and the hit kept. Returns 1 if kept. */
+static inline int sc_top_offer(const sc_top_item *it, const sc_bvh *b, sc_hitrec *h, sc_hitrec *best)
+{
+    sc_top_map_ids(b, h);
+    if (h->prim != SC_HITREC_MISS)
+        h->inst = it->inst;
+    if (!sc_top_better(h, best))
+        return 0;
+    if (it->inv)
+        sc_top_normal(it->cof, h->ng);
+    *best = *h;
+    return 1;
+}
+
+/* An item's counters into the caller's, but not its rays: the caller
+ * counts each world ray once. */
+static inline void sc_top_add_counters(sc_trace_stats *st, const sc_trace_stats *s)
+{
+    st->nodes += s->nodes, st->leaves += s->leaves, st->sphere_tests += s->sphere_tests;
+    st->sphere_rejects += s->sphere_rejects, st->tri_tests += s->tri_tests, st->tri_hits += s->tri_hits;
 }
 
 /* The top node test with every box grown by E, in the arithmetic of
@@ -296,11 +317,7 @@ static inline void sc_top_pre(const sc_top *T, const sc_ray *r, sc_ray_pre *p)
         p->org[k] = r->org[k];
         p->dir[k] = r->dir[k];
         p->rd[k] = 1.0f / r->dir[k];
-        const float g = fmaf(fabsf(p->org[k]), 0x1.0cp-23f, fmaf(mk, 0x1.0cp-23f, 0x1p-123f));
-        const float pad = fmaf(fabsf(p->rd[k]), g, fmaf(mk, 0x1p-124f, 0x1p-122f));
-        const float ord = p->org[k] * p->rd[k];
-        p->ord_near[k] = ord + pad;
-        p->ord_far[k] = ord - pad;
+        sc_slab_offsets(p->org[k], p->rd[k], mk, &p->ord_near[k], &p->ord_far[k]);
         const int neg = signbit(p->rd[k]) != 0;
         p->near_row[k] = 2 * k + neg;
         p->far_row[k] = 2 * k + 1 - neg;

@@ -16,22 +16,16 @@
  * same bits, without the stores and reloads of the struct. */
 SC_X86_INLINE void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
 {
-    const __m128 sgn = _mm_set1_ps(-0.0f);
     const __m128 o = _mm_loadu_ps(r->org), d = _mm_loadu_ps(r->dir);
-    const __m128 dk = _mm_max_ps(_mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(T->lo), o)),
-                                 _mm_andnot_ps(sgn, _mm_sub_ps(_mm_loadu_ps(T->hi), o)));
+    const __m128 dk = box_reach4(T->lo, T->hi, o);
     /* the largest of lanes 0-2 (max is exact: the order does not matter) */
     const __m128 m01 = _mm_max_ps(dk, _mm_permute_ps(dk, 0x55));
     const float m = _mm_cvtss_f32(_mm_max_ps(m01, _mm_permute_ps(dk, 0xaa)));
     const float X = fmaf(m, T->grow_a, T->grow_b) * SC_TOP_X_SCALE;
     const __m128 mk = _mm_mul_ps(_mm_add_ps(dk, _mm_set1_ps(X)), _mm_set1_ps(SC_TOP_M_UP));
     const __m128 rd = _mm_div_ps(_mm_set1_ps(1.0f), d);
-    const __m128 g = _mm_fmadd_ps(_mm_andnot_ps(sgn, o), _mm_set1_ps(0x1.0cp-23f),
-                                  _mm_fmadd_ps(mk, _mm_set1_ps(0x1.0cp-23f), _mm_set1_ps(0x1p-123f)));
-    const __m128 pad = _mm_fmadd_ps(_mm_andnot_ps(sgn, rd), g,
-                                    _mm_fmadd_ps(mk, _mm_set1_ps(0x1p-124f), _mm_set1_ps(0x1p-122f)));
-    const __m128 ord = _mm_mul_ps(o, rd);
-    const __m128 ordn = _mm_add_ps(ord, pad), ordf = _mm_sub_ps(ord, pad);
+    __m128 ordn, ordf;
+    slab_offsets4(o, rd, mk, &ordn, &ordf);
     ctx_set_slab(c, rd, ordn, ordf, r->tmin);
     ctx_set_rows(c, r);
 }
@@ -72,20 +66,11 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
         else
             k->closest(b, &r, &h);
     }
-    /* the item's counters, but not its ray: the caller counts the world ray once */
     if (st)
-        st->nodes += s.nodes, st->leaves += s.leaves, st->sphere_tests += s.sphere_tests,
-            st->sphere_rejects += s.sphere_rejects, st->tri_tests += s.tri_tests, st->tri_hits += s.tri_hits;
+        sc_top_add_counters(st, &s);
     if (ANY)
         return occ;
-    sc_top_map_ids(b, &h);
-    if (h.prim != SC_HITREC_MISS)
-        h.inst = it->inst;
-    if (sc_top_better(&h, best)) {
-        if (it->inv)
-            sc_top_normal(it->cof, h.ng);
-        *best = h;
-    }
+    sc_top_offer(it, b, &h, best);
     return 0;
 }
 

@@ -80,15 +80,15 @@ SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
 /* A hit h of item it for lane l: kept if it beats the lane's best. */
 SC_TRAVERSE_INLINE void top_pk_offer(top_pk *P, const sc_top_item *it, const sc_bvh *b, unsigned l, sc_hitrec *h)
 {
-    sc_top_map_ids(b, h);
-    if (h->prim != SC_HITREC_MISS)
-        h->inst = it->inst;
-    if (sc_top_better(h, &P->best[l])) {
-        if (it->inv)
-            sc_top_normal(it->cof, h->ng);
-        P->best[l] = *h;
+    if (sc_top_offer(it, b, h, &P->best[l]))
         P->tcull[l] = sc_top_tmax(h, P->tmax[l]);
-    }
+}
+
+/* Lane l's world ray, ending at tmax. */
+SC_TRAVERSE_INLINE sc_ray top_pk_ray(const top_pk *P, unsigned l, float tmax)
+{
+    const sc_ray r = { { P->o[0][l], P->o[1][l], P->o[2][l] }, P->tmin[l], { P->d[0][l], P->d[1][l], P->d[2][l] }, tmax };
+    return r;
 }
 
 SC_TRAVERSE_INLINE void top_pk_occluded(top_pk *P, unsigned l)
@@ -118,9 +118,7 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     uint32_t ok = 0;
     for (uint32_t e = L; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
-        const sc_ray w = { { P->o[0][l], P->o[1][l], P->o[2][l] }, P->tmin[l],
-                           { P->d[0][l], P->d[1][l], P->d[2][l] },
-                           P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]) };
+        const sc_ray w = top_pk_ray(P, l, P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]));
         sc_ray r = w;
         if (it->inv) {
             sc_top_object_ray(it->inv, &w, &r);
@@ -169,10 +167,8 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
             }
         }
     }
-    /* the objects' counters, but not their rays: the caller counts each ray once */
     if (P->st)
-        P->st->nodes += s.nodes, P->st->leaves += s.leaves, P->st->sphere_tests += s.sphere_tests,
-            P->st->sphere_rejects += s.sphere_rejects, P->st->tri_tests += s.tri_tests, P->st->tri_hits += s.tri_hits;
+        sc_top_add_counters(P->st, &s);
 }
 
 /* The packet's first origin and its spreads. */
@@ -342,23 +338,13 @@ SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *no
 #else
 SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
 {
-    const sc_top *T = P->T;
     P->negm[0] = P->negm[1] = P->negm[2] = 0;
     for (unsigned l = 0; l < 16; l++) {
-        float dk[3];
+        const sc_ray r = top_pk_ray(P, l, P->tmax[l]);
+        sc_ray_pre pre;
+        sc_top_pre(P->T, &r, &pre);
         for (int k = 0; k < 3; k++) {
-            const float dl = fabsf(T->lo[k] - P->o[k][l]), dh = fabsf(T->hi[k] - P->o[k][l]);
-            dk[k] = dl > dh ? dl : dh;
-        }
-        float m = dk[0] > dk[1] ? dk[0] : dk[1];
-        m = dk[2] > m ? dk[2] : m;
-        const float X = fmaf(m, T->grow_a, T->grow_b) * SC_TOP_X_SCALE;
-        for (int k = 0; k < 3; k++) {
-            const float o = P->o[k][l], mk = (dk[k] + X) * SC_TOP_M_UP, rd = 1.0f / P->d[k][l];
-            const float g = fmaf(fabsf(o), 0x1.0cp-23f, fmaf(mk, 0x1.0cp-23f, 0x1p-123f));
-            const float pad = fmaf(fabsf(rd), g, fmaf(mk, 0x1p-124f, 0x1p-122f));
-            const float ord = o * rd;
-            P->rd[k][l] = rd, P->ordn[k][l] = ord + pad, P->ordf[k][l] = ord - pad;
+            P->rd[k][l] = pre.rd[k], P->ordn[k][l] = pre.ord_near[k], P->ordf[k][l] = pre.ord_far[k];
             P->negm[k] |= (uint32_t)(P->d[k][l] < 0) << l;
         }
     }
@@ -453,8 +439,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             P.occluded[l] = 0;
         else
             sc_top_miss(P.tmax[l], &P.best[l]);
-        const sc_ray r = { { P.o[0][l], P.o[1][l], P.o[2][l] }, P.tmin[l],
-                           { P.d[0][l], P.d[1][l], P.d[2][l] }, P.tmax[l] };
+        const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
         single |= (uint32_t)sc_ray_parallel(&r) << l;
     }
     uint32_t pl = lanes & ~single;
@@ -465,8 +450,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     }
     for (uint32_t e = single; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
-        const sc_ray r = { { P.o[0][l], P.o[1][l], P.o[2][l] }, P.tmin[l],
-                           { P.d[0][l], P.d[1][l], P.d[2][l] }, P.tmax[l] };
+        const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
         if (any)
             P.occluded[l] = top_any(T, &r, st);
         else
