@@ -75,11 +75,14 @@ SC_TRACE_INLINE int sc_ray_parallel(const sc_ray *r)
  * the double/exact path. The SIMD set-up computes the same operations. */
 #define SC_EXACT_KS (6.11f * 0x1p-24f)
 #define SC_EXACT_CS (34.1f * 0x1p-48f)
+/* K and c0 from S; the floors are normal: FTZ|DAZ (tri_exact.c). */
+SC_TRACE_INLINE float sc_exact_k(float S) { return fmaf(S, SC_EXACT_KS, 0x1p-123f); }
+SC_TRACE_INLINE float sc_exact_c0(float S) { return fmaf(S * S, SC_EXACT_CS, 0x1p-121f); }
 SC_TRACE_INLINE void sc_exact_consts(const float m[3], float *xK, float *xc0)
 {
     float S = (m[0] + m[1]) + m[2];
-    *xK = fmaf(S, SC_EXACT_KS, 0x1p-123f);    /* floors normal: FTZ|DAZ (tri_exact.c) */
-    *xc0 = fmaf(S * S, SC_EXACT_CS, 0x1p-121f);
+    *xK = sc_exact_k(S);
+    *xc0 = sc_exact_c0(S);
 }
 
 /* The traversal's OCT parameter: 0..7 a non-parallel ray of that octant

@@ -54,7 +54,8 @@ typedef struct sc_exact_hit {
  * of the exact t, with zi = Sz z_i (the vertices' t along the ray),
  * Z = max |zi| and R = (max zi - min zi) / 2 (the spread: barycentric
  * errors sum to zero, so they only move t within the triangle's depth).
- * The derivation is in tri_exact.c. */
+ * In te, K and c0 may come from the triangle's own S instead of the root
+ * box's (sc_exact_local_bound). The derivation is in tri_exact.c. */
 #define SC_EXACT_K202 (2.02f)
 /* The kernels use one bound per lane for all three edges,
  * E1 = K (hA + hB + hC) + c0 >= each edge's E: the edge sum of the t bound is
@@ -115,6 +116,35 @@ int sc_exact_hit_test(const sc_ray *r, const float v[9]);
 /* sign of t(a) - t(b) for two triangles whose planes the ray crosses */
 int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
 
+/* A t bound above this times |t| is recomputed with sc_exact_local_bound;
+ * sc_exact_finish recomputes a hit in double above 2^-14 |t| (its
+ * [t - 2 te, t + 2 te] wider than 2^-12 |t|). */
+#define SC_EXACT_WIDE 0x1p-15f
+
+/* The edge bound of one triangle for its t bound: E1's K and c0 from the
+ * triangle's own S (sc_exact_consts' formulas) where that is below the
+ * ray's. The derivation (tri_exact.c) needs S >= |a|_1, a = fl(P - O), for
+ * the vertices of the edges it bounds, not for the whole root box: here
+ * |a|_1 <= h + (1 + |Sx| + |Sy|) |a_kz| (the shear undone; h = |Px| + |Py|),
+ * evaluated here in float: sums of positive terms with at most four
+ * roundings, below 5u relative, inside the 0.07 % the constants carry for
+ * the rounding of S (a flushed product under FTZ|DAZ errs by below 4 MIN
+ * absolute, inside K's and c0's floors). The root box's S is the farthest
+ * corner: for a hit near the origin (rays that start inside the model) it
+ * overstates the error by the model's size over the hit's distance, and a
+ * t bound that loose sends the hit to sc_exact_finish's double recompute
+ * (a third of the random rays' hits on the bunny). Only the t bound uses
+ * it, and only where the ray's is wide (SC_EXACT_WIDE): the edges are
+ * certified with E1, whose one bound per ray costs nothing per lane. */
+SC_TRACE_INLINE float sc_exact_local_bound(float xK, float xc0, float Sx, float Sy, float hA, float hB, float hC,
+                                           float Akz, float Bkz, float Ckz)
+{
+    const float sxy = (1.0f + fabsf(Sx)) + fabsf(Sy);
+    const float S = sc_fmax(sc_fmax(fmaf(sxy, fabsf(Akz), hA), fmaf(sxy, fabsf(Bkz), hB)), fmaf(sxy, fabsf(Ckz), hC));
+    const float K = sc_fmin(sc_exact_k(S), xK), c0 = sc_fmin(sc_exact_c0(S), xc0);
+    return fmaf(K, (hA + hB) + hC, c0);
+}
+
 /* The float filter of the exact test (SC_TRI_EXACT): the watertight
  * arithmetic plus the forward error bounds of tri_exact.h. Returns 0 for a
  * certain miss (two edges of certainly opposite signs, or t certainly
@@ -145,8 +175,12 @@ SC_TRACE_INLINE int sc_tri_exact_filter(const sc_ray_pre *p, const float *rows, 
     float tt = T * inv;
     float zmax = sc_fmax(sc_fmax(Az, Bz), Cz), zmin = sc_fmin(sc_fmin(Az, Bz), Cz);
     float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
-    float q = fmaf(R, E1 * SC_EXACT_K606, SC_EXACT_FLOOR_N);
-    float e = fmaf(q, fabsf(inv), fmaf(Z, SC_EXACT_K15U, fmaf(fabsf(tt), SC_EXACT_K3U, SC_EXACT_FLOOR_T)));
+    const float zt = fmaf(Z, SC_EXACT_K15U, fmaf(fabsf(tt), SC_EXACT_K3U, SC_EXACT_FLOOR_T));
+    float e = fmaf(fmaf(R, E1 * SC_EXACT_K606, SC_EXACT_FLOOR_N), fabsf(inv), zt);
+    if (e > SC_EXACT_WIDE * fabsf(tt)) {
+        const float El = sc_exact_local_bound(p->xK, p->xc0, p->Sx, p->Sy, hA, hB, hC, sh.Akz, sh.Bkz, sh.Ckz);
+        e = fmaf(fmaf(R, El * SC_EXACT_K606, SC_EXACT_FLOOR_N), fabsf(inv), zt);
+    }
     if (!(e < INFINITY) || !(fabsf(inv) >= 0x1p-126f))   /* 1/det subnormal or flushed: undecided */
         return 1;
     if (tt - e > tmax || tt + e < tmin)

@@ -27,7 +27,8 @@ tri_exact8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, unsign
     __m256 hA = _mm256_add_ps(ABS(Ax), ABS(Ay));
     __m256 hB = _mm256_add_ps(ABS(Bx), ABS(By));
     __m256 hC = _mm256_add_ps(ABS(Cx), ABS(Cy));
-    __m256 E1 = _mm256_fmadd_ps(c->xK, _mm256_add_ps(_mm256_add_ps(hA, hB), hC), c->xc0);
+    const __m256 hsum = _mm256_add_ps(_mm256_add_ps(hA, hB), hC);
+    __m256 E1 = _mm256_fmadd_ps(c->xK, hsum, c->xc0);
     __m256 nE1 = _mm256_xor_ps(E1, sgn);
 #if SC_X86_AVX512
     __mmask8 pU = _mm256_cmp_ps_mask(U, E1, _CMP_GT_OQ), nU = _mm256_cmp_ps_mask(U, nE1, _CMP_LT_OQ);
@@ -58,11 +59,26 @@ tri_exact8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, unsign
         __m256 zmax = _mm256_max_ps(_mm256_max_ps(Az, Bz), Cz), zmin = _mm256_min_ps(_mm256_min_ps(Az, Bz), Cz);
         __m256 Z = _mm256_max_ps(zmax, _mm256_xor_ps(zmin, sgn));
         __m256 R = _mm256_mul_ps(_mm256_sub_ps(zmax, zmin), _mm256_set1_ps(0.5f));
-        __m256 q = _mm256_fmadd_ps(R, _mm256_mul_ps(E1, _mm256_set1_ps(SC_EXACT_K606)), _mm256_set1_ps(SC_EXACT_FLOOR_N));
-        __m256 e = _mm256_fmadd_ps(q, ABS(inv),
-                                   _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_EXACT_K15U),
-                                                   _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_EXACT_K3U),
-                                                                   _mm256_set1_ps(SC_EXACT_FLOOR_T))));
+        const __m256 zt = _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_EXACT_K15U),
+                                          _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_EXACT_K3U),
+                                                          _mm256_set1_ps(SC_EXACT_FLOOR_T)));
+        const __m256 k606 = _mm256_set1_ps(SC_EXACT_K606), floor_n = _mm256_set1_ps(SC_EXACT_FLOOR_N);
+        __m256 e = _mm256_fmadd_ps(_mm256_fmadd_ps(R, _mm256_mul_ps(E1, k606), floor_n), ABS(inv), zt);
+        const __m256 wide = _mm256_cmp_ps(e, _mm256_mul_ps(_mm256_set1_ps(SC_EXACT_WIDE), ABS(tt)), _CMP_GT_OQ);
+        if (mask8(wide) & in) {
+            /* sc_exact_local_bound */
+            const __m256 sxy = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(1.0f), ABS(c->Sx)), ABS(c->Sy));
+            const __m256 S = _mm256_max_ps(
+                _mm256_max_ps(_mm256_fmadd_ps(sxy, ABS(Akz), hA), _mm256_fmadd_ps(sxy, ABS(Bkz), hB)),
+                _mm256_fmadd_ps(sxy, ABS(Ckz), hC));
+            const __m256 K =
+                _mm256_min_ps(_mm256_fmadd_ps(S, _mm256_set1_ps(SC_EXACT_KS), _mm256_set1_ps(0x1p-123f)), c->xK);
+            const __m256 c0 = _mm256_min_ps(
+                _mm256_fmadd_ps(_mm256_mul_ps(S, S), _mm256_set1_ps(SC_EXACT_CS), _mm256_set1_ps(0x1p-121f)), c->xc0);
+            const __m256 El = _mm256_fmadd_ps(K, hsum, c0);
+            const __m256 el = _mm256_fmadd_ps(_mm256_fmadd_ps(R, _mm256_mul_ps(El, k606), floor_n), ABS(inv), zt);
+            e = _mm256_blendv_ps(e, el, wide);
+        }
         unsigned fin = mask8(_mm256_and_ps(_mm256_cmp_ps(e, _mm256_set1_ps(INFINITY), _CMP_LT_OQ),
                                            _mm256_cmp_ps(ABS(inv), _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ)));
         unsigned out = mask8(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(tt, e), _mm256_set1_ps(tmax), _CMP_GT_OQ),
