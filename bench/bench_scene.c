@@ -15,7 +15,9 @@
  * ratio above 1 means spherecull is faster (or smaller).
  *
  *   bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R]
- *               [--refits K] [--threads T] */
+ *               [--refits K] [--threads T] [--min-time S]
+ * Each timed row runs its ray set until the faster tracer has run S
+ * seconds (default 0.2), the same number of passes for both. */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
 #include <getopt.h>
@@ -35,6 +37,8 @@
 #include "spherecull/sc_scene.h"
 
 static atomic_llong embree_bytes;
+/* Each timed run repeats its ray set until it has run this long (--min-time). */
+static double min_time = 0.2;
 /* Our builds and refits: the default configuration on --threads threads. */
 static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
@@ -265,11 +269,24 @@ static void time_set_as(const char *name, const sc_accel *a, RTCScene e, const s
     result *ro = malloc(n * sizeof *ro), *re = malloc(n * sizeof *re);
     double *to = malloc(sizeof(double) * (size_t)repeats), *te = malloc(sizeof(double) * (size_t)repeats),
            *ratio = malloc(sizeof(double) * (size_t)repeats);
+#define OURS() (packet ? run_ours16(a, rays, n, shadow, ro) : run_ours(a, rays, n, shadow, ro))
+#define EMBREE() (packet ? run_embree16(e, rays, n, shadow, re) : run_embree(e, rays, n, shadow, re))
+    /* passes of the set per timed run, the same for both tracers: enough
+     * for the faster one to run min_time (a set of 40k shadow rays takes
+     * 20 ms, and runs that short moved by +-10 %) */
+    const double t1 = fmin(OURS(), EMBREE());
+    const int passes = t1 >= min_time ? 1 : (int)fmin(ceil(min_time / fmax(t1, 1e-6)), 1000);
     for (int r = 0; r < repeats; r++) {
-        to[r] = packet ? run_ours16(a, rays, n, shadow, ro) : run_ours(a, rays, n, shadow, ro);
-        te[r] = packet ? run_embree16(e, rays, n, shadow, re) : run_embree(e, rays, n, shadow, re);
+        to[r] = te[r] = 0;
+        for (int p = 0; p < passes; p++)
+            to[r] += OURS();
+        for (int p = 0; p < passes; p++)
+            te[r] += EMBREE();
+        to[r] /= passes, te[r] /= passes;
         ratio[r] = te[r] / to[r];
     }
+#undef OURS
+#undef EMBREE
     size_t same = 0;
     for (size_t i = 0; i < n; i++)
         same += ro[i].prim == re[i].prim && ro[i].inst == re[i].inst;
@@ -534,6 +551,7 @@ int main(int argc, char **argv)
                                           { "repeats", required_argument, 0, 'r' },
                                           { "refits", required_argument, 0, 'k' },
                                           { "threads", required_argument, 0, 't' },
+                                          { "min-time", required_argument, 0, 'T' },
                                           { 0, 0, 0, 0 } };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -547,10 +565,12 @@ int main(int argc, char **argv)
         case 'r': repeats = atoi(optarg); break;
         case 'k': refits = atoi(optarg); break;
         case 't': threads = atoi(optarg); break;
-        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T]");
+        case 'T': min_time = atof(optarg); break;
+        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S]");
         }
     }
-    if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1)
+    if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1 ||
+        !(min_time >= 0 && min_time <= 60))
         die("bad option value (the image size in multiples of 4)");
     sc_bvh_config_default(&build_cfg);
     build_cfg.threads = threads;
@@ -572,9 +592,9 @@ int main(int argc, char **argv)
     if (!dev)
         die("no Embree device");
     rtcSetDeviceMemoryMonitorFunction(dev, monitor, NULL);
-    printf("mesh %s (%zu triangles); embree: %s (FTZ|DAZ); both build on %d thread%s, trace on 1; %d repeats, "
-           "medians\n",
-           spec, view.mesh.triangle_count, ver, threads, threads == 1 ? "" : "s", repeats);
+    printf("mesh %s (%zu triangles); embree: %s (FTZ|DAZ); both build on %d thread%s, trace on 1; %d repeats of "
+           ">= %.2g s, medians\n",
+           spec, view.mesh.triangle_count, ver, threads, threads == 1 ? "" : "s", repeats, min_time);
     if (ninst > 0)
         instancing(&view.mesh, ninst, w, h, repeats, dev);
     if (refits > 0)
