@@ -663,7 +663,7 @@ static void test_filter_t_bound(void **state)
         /* a = w x n, b = n x a: the plane's axes */
         a[0] = w[1] * nrm[2] - w[2] * nrm[1], a[1] = w[2] * nrm[0] - w[0] * nrm[2], a[2] = w[0] * nrm[1] - w[1] * nrm[0];
         b[0] = nrm[1] * a[2] - nrm[2] * a[1], b[1] = nrm[2] * a[0] - nrm[0] * a[2], b[2] = nrm[0] * a[1] - nrm[1] * a[0];
-        float rows[9 * 4];
+        float rows[9 * 4] = { 0 };   /* lane 0 of a leaf block of width 4 */
         for (int j = 0; j < 3; j++) {
             const double ang = 2.0943951023931953 * j + sc_rng_range(&g, -0.5, 0.5);
             for (int k = 0; k < 3; k++)

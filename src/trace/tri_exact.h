@@ -102,9 +102,11 @@ __attribute__((cold)) unsigned sc_exact_resolve(const sc_ray *r, const float *ro
  * ray grazes the triangle (wide [lo, hi]); then the reported t, u, v are
  * recomputed in double. Called once per ray on the final closest hit. */
 __attribute__((cold)) void sc_exact_report(const sc_ray *r, sc_exact_hit *best);
+/* [lo, hi] wider than this times |t|: recomputed */
+#define SC_EXACT_REPORT_WIDTH 0x1p-12f
 static inline void sc_exact_finish(const sc_ray *r, sc_exact_hit *best)
 {
-    if (best->have && !(best->hi - best->lo <= 0x1p-12f * fabsf(best->t)))
+    if (best->have && !(best->hi - best->lo <= SC_EXACT_REPORT_WIDTH * fabsf(best->t)))
         sc_exact_report(r, best);
 }
 
@@ -116,10 +118,10 @@ int sc_exact_hit_test(const sc_ray *r, const float v[9]);
 /* sign of t(a) - t(b) for two triangles whose planes the ray crosses */
 int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
 
-/* A t bound above this times |t| is recomputed with sc_exact_local_bound;
- * sc_exact_finish recomputes a hit in double above 2^-14 |t| (its
- * [t - 2 te, t + 2 te] wider than 2^-12 |t|). */
-#define SC_EXACT_WIDE 0x1p-15f
+/* A t bound above this times |t| is recomputed with sc_exact_local_bound:
+ * half of what sc_exact_finish lets through (its [t - 2 te, t + 2 te]
+ * within SC_EXACT_REPORT_WIDTH |t|, so te up to a quarter of that). */
+#define SC_EXACT_WIDE (SC_EXACT_REPORT_WIDTH / 8)
 
 /* The edge bound of one triangle for its t bound: E1's K and c0 from the
  * triangle's own S (sc_exact_consts' formulas) where that is below the
