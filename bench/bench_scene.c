@@ -15,9 +15,11 @@
  * ratio above 1 means spherecull is faster (or smaller).
  *
  *   bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R]
- *               [--refits K] [--threads T] [--min-time S]
+ *               [--refits K] [--threads T] [--min-time S] [--rows LIST]
  * Each timed row runs its ray set until the faster tracer has run S
- * seconds (default 0.2), the same number of passes for both. */
+ * seconds (default 0.2), the same number of passes for both. --rows
+ * (comma-separated row names, e.g. primary16) times only those rows of
+ * the instancing table: a profile of one path. */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
 #include <getopt.h>
@@ -39,6 +41,8 @@
 static atomic_llong embree_bytes;
 /* Each timed run repeats its ray set until it has run this long (--min-time). */
 static double min_time = 0.2;
+/* --rows: the instancing rows to time (NULL: all) */
+static const char *rows_wanted;
 /* Our builds and refits: the default configuration on --threads threads. */
 static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
@@ -259,12 +263,30 @@ static double run_embree16(RTCScene scene, const sc_ray *rays, size_t n, int sha
     return sc_now_seconds() - t0;
 }
 
+/* Whether --rows names row `name` (a whole item of its list). */
+static int row_wanted(const char *name)
+{
+    if (!rows_wanted)
+        return 1;
+    const size_t n = strlen(name);
+    for (const char *p = rows_wanted; *p;) {
+        const char *e = strchr(p, ',');
+        const size_t len = e ? (size_t)(e - p) : strlen(p);
+        if (len == n && !strncmp(p, name, n))
+            return 1;
+        if (!e)
+            break;
+        p = e + 1;
+    }
+    return 0;
+}
+
 /* Paired repeats of one ray set; prints one row. packet: 16-ray packets
  * on both sides instead of single rays. */
 static void time_set_as(const char *name, const sc_accel *a, RTCScene e, const sc_ray *rays, size_t n, int shadow,
                         int repeats, int packet)
 {
-    if (!n)
+    if (!n || !row_wanted(name))
         return;
     result *ro = malloc(n * sizeof *ro), *re = malloc(n * sizeof *re);
     double *to = malloc(sizeof(double) * (size_t)repeats), *te = malloc(sizeof(double) * (size_t)repeats),
@@ -552,6 +574,7 @@ int main(int argc, char **argv)
                                           { "refits", required_argument, 0, 'k' },
                                           { "threads", required_argument, 0, 't' },
                                           { "min-time", required_argument, 0, 'T' },
+                                          { "rows", required_argument, 0, 'R' },
                                           { 0, 0, 0, 0 } };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -566,12 +589,28 @@ int main(int argc, char **argv)
         case 'k': refits = atoi(optarg); break;
         case 't': threads = atoi(optarg); break;
         case 'T': min_time = atof(optarg); break;
-        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S]");
+        case 'R': rows_wanted = optarg; break;
+        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST]");
         }
     }
     if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1 ||
         !(min_time >= 0 && min_time <= 60))
         die("bad option value (the image size in multiples of 4)");
+    if (rows_wanted) {
+        static const char *const known[] = { "primary", "shadow", "diffuse", "primary16", "shadow16", "diffuse16" };
+        for (const char *p = rows_wanted;;) {
+            const char *e = strchr(p, ',');
+            const size_t len = e ? (size_t)(e - p) : strlen(p);
+            int ok = 0;
+            for (size_t i = 0; i < sizeof known / sizeof *known; i++)
+                ok |= strlen(known[i]) == len && !strncmp(known[i], p, len);
+            if (!ok)
+                die("--rows: names among primary, shadow, diffuse, primary16, shadow16, diffuse16");
+            if (!e)
+                break;
+            p = e + 1;
+        }
+    }
     sc_bvh_config_default(&build_cfg);
     build_cfg.threads = threads;
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);

@@ -880,6 +880,133 @@ static void test_growth(void **state)
     mesh_free(&box);
 }
 
+/* ---- object rays the tracer refuses ----------------------------------------- */
+
+/* An instance scaled by 2^-70: a world ray from farther than about 1e-3 of
+ * it has an object-space origin beyond 1e18, which the tracer refuses, so
+ * the ray misses that instance (sc_accel.h), while rays from next to it
+ * hit it. Packets of 8 and 16, closest and any, on every ISA level, must
+ * answer as the single rays do, and the refused rays must miss it. */
+static void test_refused_object_rays(void **state)
+{
+    (void)state;
+    mesh tor;
+    const double o0[3] = { 0, 0, 0 };
+    torus(&tor, 36, 18, o0, 1.0);
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    sc_accel *obj, *world;
+    assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+    const sc_mesh_view vt = { tor.pos, tor.nv, tor.idx, tor.nt, 0, 0 };
+    assert_int_equal(sc_accel_attach_mesh(obj, &vt, SC_ACCEL_SHARED, NULL), SC_OK);
+    assert_int_equal(sc_accel_commit(obj), SC_OK);
+    assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+    const float s = 0x1p-70f;
+    const float tiny[12] = { s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0 };
+    const float beside[12] = { 1, 0, 0, 4, 0, 1, 0, 0, 0, 0, 1, 0 };
+    uint32_t id_tiny, id_beside;
+    assert_int_equal(sc_accel_attach_instance(world, obj, tiny, &id_tiny), SC_OK);
+    assert_int_equal(sc_accel_attach_instance(world, obj, beside, &id_beside), SC_OK);
+    assert_int_equal(sc_accel_commit(world), SC_OK);
+    enum { N = 1024 };
+    sc_ray *rays = calloc(N, sizeof *rays);
+    sc_hitrec *want = calloc(N, sizeof *want);
+    int32_t *want_occ = calloc(N, sizeof *want_occ);
+    assert_non_null(rays), assert_non_null(want), assert_non_null(want_occ);
+    size_t refused = 0, tiny_hits = 0, beside_hits = 0;
+    for (size_t i = 0; i < N; i++) {
+        sc_ray *r = &rays[i];
+        /* a point on the torus's ring to aim at, in object space */
+        const double u = rnd_in(0, 6.283185307179586);
+        const double ring[3] = { cos(u), sin(u), rnd_in(-0.3, 0.3) };
+        float aim[3];
+        switch (i % 4) {
+        case 0:   /* from afar, through the tiny instance: refused */
+            for (int k = 0; k < 3; k++)
+                r->org[k] = (float)rnd_in(-1, 1), aim[k] = (float)(s * ring[k]);
+            break;
+        case 1:   /* from next to it, with a direction of 1e18 times its
+                   * length: a non-finite object direction, refused */
+        case 2:   /* from next to it: an object ray it takes */
+            for (int k = 0; k < 3; k++)
+                r->org[k] = (float)(s * rnd_in(-2, 2)), aim[k] = (float)(s * ring[k]);
+            break;
+        default:  /* at the other instance */
+            for (int k = 0; k < 3; k++)
+                r->org[k] = (float)(rnd_in(-1, 1) + (k == 0 ? 4 : 0) + (k == 2 ? 3 : 0)),
+                aim[k] = (float)(ring[k] + (k == 0 ? 4 : 0));
+            break;
+        }
+        double len = 0;
+        for (int k = 0; k < 3; k++)
+            len += ((double)aim[k] - r->org[k]) * ((double)aim[k] - r->org[k]);
+        for (int k = 0; k < 3; k++)
+            r->dir[k] = i % 4 == 1 ? (float)(((double)aim[k] - r->org[k]) / sqrt(len) * 1e18) : aim[k] - r->org[k];
+        r->tmin = 0, r->tmax = INFINITY;
+        assert_int_equal(sc_accel_closest(world, r, &want[i], NULL), SC_OK);
+        assert_int_equal(sc_accel_any(world, r, &want_occ[i], NULL), SC_OK);
+        sc_ray o;
+        assert_int_equal(sc_accel_instance_ray(world, id_tiny, r, &o), SC_OK);
+        int taken = (o.dir[0] != 0) | (o.dir[1] != 0) | (o.dir[2] != 0);
+        for (int k = 0; k < 3; k++)
+            taken &= (fabsf(o.org[k]) < 1e18f) & (fabsf(o.dir[k]) <= FLT_MAX);
+        if (!taken) {
+            refused++;
+            assert_int_not_equal(want[i].inst, id_tiny);
+        }
+        tiny_hits += want[i].inst == id_tiny;
+        beside_hits += want[i].inst == id_beside;
+    }
+    print_message("%zu of %d rays refused by the tiny instance; hits: tiny %zu, beside %zu\n", refused, N, tiny_hits,
+                  beside_hits);
+    assert_true(refused >= N / 4);
+    assert_true(tiny_hits >= N / 16);
+    assert_true(beside_hits >= N / 16);
+    const sc_isa start = sc_isa_active();
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        for (size_t base = 0; base < N; base += 16) {
+            sc_ray_packet16 p16;
+            sc_ray_packet8 p8[2];
+            int32_t valid[16], o16[16], o8[16];
+            for (unsigned i = 0; i < 16; i++) {
+                const sc_ray *q = &rays[base + i];
+                const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin, q->dir[0], q->dir[1], q->dir[2], q->tmax };
+                for (unsigned c = 0; c < 8; c++)
+                    (&p16.ox[0])[16 * c + i] = f[c], (&p8[i / 8].ox[0])[8 * c + i % 8] = f[c];
+                valid[i] = 1;
+            }
+            sc_hit_packet16 h16;
+            sc_hit_packet8 h8[2];
+            assert_int_equal(sc_accel_closest16(world, valid, &p16, &h16, NULL), SC_OK);
+            assert_int_equal(sc_accel_any16(world, valid, &p16, o16, NULL), SC_OK);
+            for (unsigned j = 0; j < 2; j++) {
+                assert_int_equal(sc_accel_closest8(world, valid, &p8[j], &h8[j], NULL), SC_OK);
+                assert_int_equal(sc_accel_any8(world, valid, &p8[j], o8 + 8 * j, NULL), SC_OK);
+            }
+            for (unsigned i = 0; i < 16; i++) {
+                const sc_hitrec *w = &want[base + i];
+                const sc_hit_packet8 *g8 = &h8[i / 8];
+                const unsigned l = i % 8;
+                if (h16.prim[i] != w->prim || h16.inst[i] != w->inst || memcmp(&h16.t[i], &w->t, sizeof w->t) ||
+                    o16[i] != want_occ[base + i] || g8->prim[l] != w->prim || g8->inst[l] != w->inst ||
+                    memcmp(&g8->t[l], &w->t, sizeof w->t) || o8[i] != want_occ[base + i])
+                    fail_msg("%s ray %zu: packet16 inst %u prim %u t %a occluded %d, packet8 inst %u prim %u "
+                             "occluded %d; single inst %u prim %u t %a occluded %d",
+                             sc_isa_name((sc_isa)isa), base + i, h16.inst[i], h16.prim[i], h16.t[i], o16[i],
+                             g8->inst[l], g8->prim[l], o8[i], w->inst, w->prim, w->t, want_occ[base + i]);
+            }
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    sc_accel_release(world);
+    sc_accel_release(obj);
+    free(rays), free(want), free(want_occ);
+    mesh_free(&tor);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -1191,6 +1318,7 @@ int main(void)
         cmocka_unit_test(test_no_holes),
         cmocka_unit_test(test_packets),
         cmocka_unit_test(test_growth),
+        cmocka_unit_test(test_refused_object_rays),
         cmocka_unit_test(test_refit),
         cmocka_unit_test(test_errors),
     };
