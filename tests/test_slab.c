@@ -607,6 +607,66 @@ static void test_nodes(void **state)
     assert_int_equal(st.dist_bad_uf, 0);
 }
 
+/* sc_ray_valid against its rule, written out here field by field: tmin
+ * >= 0, tmax not NaN, every |o_k| < SC_MAX_ORIGIN, every d_k finite, some
+ * d_k != 0. Each field runs through the values next to every boundary
+ * (signed zeros, subnormals, 1e18 and its neighbours, FLT_MAX, infinities,
+ * NaNs) alone, and all fields at once in random combinations. */
+static int ray_valid_rule(const sc_ray *r)
+{
+    int ok = !isnan(r->tmax) && r->tmin >= 0;
+    int nonzero = 0;
+    for (int k = 0; k < 3; k++) {
+        ok = ok && !isnan(r->org[k]) && fabsf(r->org[k]) < SC_MAX_ORIGIN;
+        ok = ok && isfinite(r->dir[k]);
+        nonzero = nonzero || r->dir[k] != 0;
+    }
+    return ok && nonzero;
+}
+
+static void test_ray_valid(void **state)
+{
+    (void)state;
+    const float M = SC_MAX_ORIGIN;
+    const float vals[] = { 0.0f, -0.0f, 1.0f, -1.0f, 0x1p-140f, -0x1p-140f, FLT_MIN, -FLT_MIN, 1e-18f,
+                           M, -M, nextafterf(M, 0), -nextafterf(M, 0), nextafterf(M, INFINITY), FLT_MAX,
+                           -FLT_MAX, INFINITY, -INFINITY, NAN, -NAN, 3.0f };
+    enum { NV = sizeof vals / sizeof vals[0] };
+    _Static_assert(sizeof(sc_ray) == 8 * sizeof(float), "a ray is its eight fields");
+    const float base[8] = { 1, 2, 3, 0, 0.5f, -0.25f, 1, 10 };   /* org, tmin, dir, tmax */
+    size_t n = 0, valid = 0;
+    for (int f = 0; f < 8; f++)
+        for (int v = 0; v < NV; v++) {
+            float fv[8];
+            memcpy(fv, base, sizeof fv);
+            fv[f] = vals[v];
+            sc_ray r;
+            memcpy(&r, fv, sizeof r);
+            const int got = sc_ray_valid(&r), want = ray_valid_rule(&r);
+            if (got != want)
+                fail_msg("field %d = %a: sc_ray_valid %d, the rule %d", f, (double)vals[v], got, want);
+            n++, valid += want;
+        }
+    sc_rng g;
+    sc_rng_seed(&g, 99);
+    for (int i = 0; i < 200000; i++) {
+        float fv[8];
+        for (int f = 0; f < 8; f++)
+            /* mostly ordinary values, so that both answers are common */
+            fv[f] = sc_rng_next(&g) % 4 ? (float)sc_rng_range(&g, f == 3 ? 0 : -5, 5) : vals[sc_rng_next(&g) % NV];
+        sc_ray r;
+        memcpy(&r, fv, sizeof r);
+        const int got = sc_ray_valid(&r), want = ray_valid_rule(&r);
+        if (got != want)
+            fail_msg("ray (%a %a %a) tmin %a (%a %a %a) tmax %a: sc_ray_valid %d, the rule %d", (double)r.org[0],
+                     (double)r.org[1], (double)r.org[2], (double)r.tmin, (double)r.dir[0], (double)r.dir[1],
+                     (double)r.dir[2], (double)r.tmax, got, want);
+        n++, valid += want;
+    }
+    print_message("%zu rays, %zu valid\n", n, valid);
+    assert_true(valid > n / 8 && valid < n - n / 8);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -629,6 +689,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_planes),
         cmocka_unit_test(test_nodes),
+        cmocka_unit_test(test_ray_valid),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -230,10 +230,47 @@ SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
     return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
 }
 
+/* Rays known to be incoherent (the stream calls' one-by-one path, packet
+ * lanes that parted ways): one body for every octant. The octant switch
+ * below is an indirect jump on the ray's direction signs; for rays in
+ * random directions it mispredicts about 7 times in 8, which costs more
+ * than the constant rows save (docs/compare.md, seventh session). */
+SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
+                                           const int TEST, const uint64_t root)
+{
+    if (sc_ray_parallel(r))
+        return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
+    return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
+}
+
+/* Which of the two a closest-hit call takes is learnt per thread from the
+ * rays before it: a count, saturating at 0 and 15, goes up by one when a
+ * ray's octant differs from the one before and down by one when it does
+ * not. At 8 or more (rays whose octant changes more often than not:
+ * random and diffuse rays) the call takes the one body, else the octant
+ * switch (camera rays keep their octant from one ray to the next, and the
+ * constant rows pay there). The branch on the count is predictable where
+ * the switch is not; both bodies give the same bits, so only the speed
+ * depends on the history. Any-hit calls keep the switch: the history cost
+ * them 3-7 % on coherent shadow rays (docs/compare.md, twenty-second
+ * session). Thread-local, initial-exec: no call to find it, and no state
+ * shared between threads. */
+static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
+    int oct, score;
+} sc_oct_history;
+
 SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
                                           const int TEST, const uint64_t root)
 {
-    switch (ray_octant(r)) {
+    const int oct = ray_octant(r);
+    if (!ANY) {
+        int score = sc_oct_history.score + (oct != sc_oct_history.oct ? 1 : -1);
+        score = score < 0 ? 0 : score > 15 ? 15 : score;
+        sc_oct_history.score = score, sc_oct_history.oct = oct;
+        if (score >= 8)
+            return traverse_incoherent(b, r, h, ANY, TEST, root);
+    }
+    switch (oct) {
     case -2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
     case 0: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 0, root);
     case 1: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 1, root);
@@ -244,19 +281,6 @@ SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_h
     case 6: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 6, root);
     default: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 7, root);
     }
-}
-
-/* Rays known to be incoherent (the stream calls' one-by-one path, packet
- * lanes that parted ways): one body for every octant. The octant switch
- * above is an indirect jump on the ray's direction signs; for rays in
- * random directions it mispredicts about 7 times in 8, which costs more
- * than the constant rows save (docs/compare.md, seventh session). */
-SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
-                                           const int TEST, const uint64_t root)
-{
-    if (sc_ray_parallel(r))
-        return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
-    return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
 }
 
 static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
