@@ -64,6 +64,22 @@ static void make_rays(sc_ray *rays, size_t n, const float lo[3], const float hi[
     }
 }
 
+/* rays[0..15] as one packet of 16 and, when p8 is given, as two packets
+ * of 8; every lane valid. */
+static void pack_rays(const sc_ray *rays, sc_ray_packet16 *p16, sc_ray_packet8 *p8, int32_t valid[16])
+{
+    for (unsigned i = 0; i < 16; i++) {
+        const sc_ray *q = &rays[i];
+        const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin, q->dir[0], q->dir[1], q->dir[2], q->tmax };
+        for (unsigned c = 0; c < 8; c++) {
+            (&p16->ox[0])[16 * c + i] = f[c];
+            if (p8)
+                (&p8[i / 8].ox[0])[8 * c + i % 8] = f[c];
+        }
+        valid[i] = 1;
+    }
+}
+
 static int same_bits(const sc_hitrec *a, const sc_hitrec *b)
 {
     return memcmp(&a->t, &b->t, 4) == 0 && memcmp(&a->u, &b->u, 4) == 0 && memcmp(&a->v, &b->v, 4) == 0 &&
@@ -855,13 +871,7 @@ static void test_growth(void **state)
         for (size_t base = 0; base < N; base += 16) {
             sc_ray_packet16 p;
             int32_t valid[16], o16[16];
-            for (unsigned i = 0; i < 16; i++) {
-                const sc_ray *q = &rays[base + i];
-                const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin, q->dir[0], q->dir[1], q->dir[2], q->tmax };
-                for (unsigned c = 0; c < 8; c++)
-                    (&p.ox[0])[16 * c + i] = f[c];
-                valid[i] = 1;
-            }
+            pack_rays(rays + base, &p, NULL, valid);
             sc_hit_packet16 h;
             assert_int_equal(sc_accel_closest16(world, valid, &p, &h, NULL), SC_OK);
             assert_int_equal(sc_accel_any16(world, valid, &p, o16, NULL), SC_OK);
@@ -971,13 +981,7 @@ static void test_refused_object_rays(void **state)
             sc_ray_packet16 p16;
             sc_ray_packet8 p8[2];
             int32_t valid[16], o16[16], o8[16];
-            for (unsigned i = 0; i < 16; i++) {
-                const sc_ray *q = &rays[base + i];
-                const float f[8] = { q->org[0], q->org[1], q->org[2], q->tmin, q->dir[0], q->dir[1], q->dir[2], q->tmax };
-                for (unsigned c = 0; c < 8; c++)
-                    (&p16.ox[0])[16 * c + i] = f[c], (&p8[i / 8].ox[0])[8 * c + i % 8] = f[c];
-                valid[i] = 1;
-            }
+            pack_rays(rays + base, &p16, p8, valid);
             sc_hit_packet16 h16;
             sc_hit_packet8 h8[2];
             assert_int_equal(sc_accel_closest16(world, valid, &p16, &h16, NULL), SC_OK);
