@@ -15,9 +15,6 @@
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "spherecull/sc_prefilter.h"
 
@@ -54,30 +51,16 @@ typedef struct sc_ray_pre {
 } sc_ray_pre;
 
 /* Without branches (& and | on the compares, |x| <= FLT_MAX for finite):
- * every traced ray is checked, and the top level checks every object ray
- * it makes, one per instance visit. On x86 the two halves of the ray
- * (origin and tmin, direction and tmax) are one SSE register each: the
- * same compares in 35 instructions instead of 52 (a random ray on the
- * bunny costs about 700). */
+ * the top level checks every object ray it makes, one per instance visit.
+ * Scalar on purpose: the rays it checks were mostly just written a float
+ * at a time (object rays, a caller's ray), and one 16-byte load of them
+ * would wait for those stores (docs/compare.md, twenty-second session). */
 static inline int sc_ray_valid(const sc_ray *r)
 {
-#if defined(__SSE2__)
-    const __m128 a = _mm_loadu_ps(r->org), b = _mm_loadu_ps(r->dir), sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
-    /* lanes 0-2: |o_k| < SC_MAX_ORIGIN; lane 3: tmin >= 0 */
-    const int ma = _mm_movemask_ps(_mm_cmplt_ps(_mm_andnot_ps(sign, a), _mm_set1_ps(SC_MAX_ORIGIN))) & 7,
-              mt = _mm_movemask_ps(_mm_cmpge_ps(a, zero)) & 8;
-    /* lanes 0-2: |d_k| <= FLT_MAX; lane 3: tmax is not NaN */
-    const int mb = _mm_movemask_ps(_mm_cmple_ps(_mm_andnot_ps(sign, b), _mm_set1_ps(FLT_MAX))) & 7,
-              mn = _mm_movemask_ps(_mm_cmpord_ps(b, b)) & 8;
-    /* some d_k != 0 (NaN included, as in C) */
-    const int nz = _mm_movemask_ps(_mm_cmpneq_ps(b, zero)) & 7;
-    return ((ma | mt) == 15) & ((mb | mn) == 15) & (nz != 0);
-#else
     int ok = (r->tmin >= 0) & (r->tmax == r->tmax);
     for (int k = 0; k < 3; k++)
         ok &= (fabsf(r->org[k]) < SC_MAX_ORIGIN) & (fabsf(r->dir[k]) <= FLT_MAX);
     return ok & ((r->dir[0] != 0) | (r->dir[1] != 0) | (r->dir[2] != 0));
-#endif
 }
 
 /* 1 iff the ray must take the parallel node test. */

@@ -22,7 +22,7 @@ sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
     if (stats)
         k->closest_stats(bvh, ray, hit, stats);
     else
-        k->closest(bvh, ray, hit);
+        k->closest_adaptive(bvh, ray, hit);
     return SC_OK;
 }
 

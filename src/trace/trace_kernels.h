@@ -31,6 +31,9 @@ typedef struct sc_trace_kernels {
     /* The same answers, for rays known to be incoherent: no branch on the
      * ray's octant (traverse_bvh8_single.h). */
     void (*closest_incoherent)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
+    /* The same again, choosing between the two by the thread's recent rays
+     * (traverse_adaptive): what sc_trace_closest calls. */
+    void (*closest_adaptive)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
     int (*any_incoherent)(const sc_bvh *bvh, const sc_ray *ray);
     void (*closest_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
     int (*any_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_trace_stats *st);

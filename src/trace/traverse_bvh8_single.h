@@ -230,46 +230,10 @@ SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
     return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
 }
 
-/* Rays known to be incoherent (the stream calls' one-by-one path, packet
- * lanes that parted ways): one body for every octant. The octant switch
- * below is an indirect jump on the ray's direction signs; for rays in
- * random directions it mispredicts about 7 times in 8, which costs more
- * than the constant rows save (docs/compare.md, seventh session). */
-SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
-                                           const int TEST, const uint64_t root)
+/* The kernel of octant oct (ray_octant's). */
+SC_TRAVERSE_INLINE int traverse_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY, const int TEST,
+                                       const uint64_t root, int oct)
 {
-    if (sc_ray_parallel(r))
-        return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
-    return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
-}
-
-/* Which of the two a closest-hit call takes is learnt per thread from the
- * rays before it: a count, saturating at 0 and 15, goes up by one when a
- * ray's octant differs from the one before and down by one when it does
- * not. At 8 or more (rays whose octant changes more often than not:
- * random and diffuse rays) the call takes the one body, else the octant
- * switch (camera rays keep their octant from one ray to the next, and the
- * constant rows pay there). The branch on the count is predictable where
- * the switch is not; both bodies give the same bits, so only the speed
- * depends on the history. Any-hit calls keep the switch: the history cost
- * them 3-7 % on coherent shadow rays (docs/compare.md, twenty-second
- * session). Thread-local, initial-exec: no call to find it, and no state
- * shared between threads. */
-static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
-    int oct, score;
-} sc_oct_history;
-
-SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
-                                          const int TEST, const uint64_t root)
-{
-    const int oct = ray_octant(r);
-    if (!ANY) {
-        int score = sc_oct_history.score + (oct != sc_oct_history.oct ? 1 : -1);
-        score = score < 0 ? 0 : score > 15 ? 15 : score;
-        sc_oct_history.score = score, sc_oct_history.oct = oct;
-        if (score >= 8)
-            return traverse_incoherent(b, r, h, ANY, TEST, root);
-    }
     switch (oct) {
     case -2: return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
     case 0: return traverse_single(b, r, h, NULL, ANY, 0, TEST, 0, root);
@@ -283,6 +247,56 @@ SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_h
     }
 }
 
+SC_TRAVERSE_INLINE int traverse_by_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
+                                          const int TEST, const uint64_t root)
+{
+    return traverse_octant(b, r, h, ANY, TEST, root, ray_octant(r));
+}
+
+/* Rays known to be incoherent (the stream calls' one-by-one path, packet
+ * lanes that parted ways): one body for every octant. The octant switch
+ * above is an indirect jump on the ray's direction signs; for rays in
+ * random directions it mispredicts about 7 times in 8, which costs more
+ * than the constant rows save (docs/compare.md, seventh session). */
+SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY,
+                                           const int TEST, const uint64_t root)
+{
+    if (sc_ray_parallel(r))
+        return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
+    return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
+}
+
+/* The public closest-hit call's kernel (sc_trace_closest): which of the
+ * two above a ray takes is learnt per thread from the rays before it. A
+ * count, saturating at 0 and 15, goes up by one when a ray's octant
+ * differs from the last one's and down by one when it does not; at 8 or
+ * more (the octant changes more often than not: random and diffuse rays)
+ * the ray takes the one body, else the octant switch (camera rays keep
+ * their octant from one ray to the next, and the constant rows pay there).
+ * The branch on the count is predictable where the switch is not; both
+ * give the same bits, so only the speed depends on the history. Any-hit
+ * calls, and the object rays of instanced scenes (whose octant changes
+ * with each instance's rotation), keep the plain switch: the history cost
+ * coherent shadow rays 3-7 % and camera packets through 1,000 instances
+ * 4 % (docs/compare.md, twenty-second session). Thread-local, initial-exec:
+ * no call to find it from the shared library, no state shared between
+ * threads. */
+static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
+    int oct, score;
+} sc_oct_history;
+
+SC_TRAVERSE_INLINE void traverse_adaptive(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int TEST)
+{
+    const int oct = ray_octant(r);
+    int score = sc_oct_history.score + (oct != sc_oct_history.oct ? 1 : -1);
+    score = score < 0 ? 0 : score > 15 ? 15 : score;
+    sc_oct_history.score = score, sc_oct_history.oct = oct;
+    if (score >= 8)
+        traverse_incoherent(b, r, h, 0, TEST, 0);
+    else
+        traverse_octant(b, r, h, 0, TEST, 0, oct);
+}
+
 static SC_TARGET void closest_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
     traverse_by_octant(b, r, h, 0, SC_TRI_WATERTIGHT, 0);
@@ -294,6 +308,10 @@ static SC_TARGET int any_watertight(const sc_bvh *b, const sc_ray *r)
 static SC_TARGET void closest_incoherent_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
     traverse_incoherent(b, r, h, 0, SC_TRI_WATERTIGHT, 0);
+}
+static SC_TARGET void closest_adaptive_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_adaptive(b, r, h, SC_TRI_WATERTIGHT);
 }
 static SC_TARGET int any_incoherent_watertight(const sc_bvh *b, const sc_ray *r)
 {
@@ -341,6 +359,10 @@ static SC_TARGET void closest_incoherent_moller(const sc_bvh *b, const sc_ray *r
 {
     traverse_incoherent(b, r, h, 0, SC_TRI_MOLLER, 0);
 }
+static SC_TARGET void closest_adaptive_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_adaptive(b, r, h, SC_TRI_MOLLER);
+}
 static SC_TARGET int any_incoherent_moller(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_incoherent(b, r, NULL, 1, SC_TRI_MOLLER, 0);
@@ -365,6 +387,10 @@ static SC_TARGET int any_exact(const sc_bvh *b, const sc_ray *r)
 static SC_TARGET void closest_incoherent_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
 {
     traverse_incoherent(b, r, h, 0, SC_TRI_EXACT, 0);
+}
+static SC_TARGET void closest_adaptive_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h)
+{
+    traverse_adaptive(b, r, h, SC_TRI_EXACT);
 }
 static SC_TARGET int any_incoherent_exact(const sc_bvh *b, const sc_ray *r)
 {
@@ -397,16 +423,16 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
         [SC_TRI_WATERTIGHT] = { .closest = closest_watertight, .any = any_watertight,                 \
-                                .closest_incoherent = closest_incoherent_watertight,                  \
+                                .closest_incoherent = closest_incoherent_watertight, .closest_adaptive = closest_adaptive_watertight,                  \
                                 .any_incoherent = any_incoherent_watertight,                          \
                                 .closest_stats = closest_stats_watertight,                            \
                                 .any_stats = any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT SC_TRACE_TOP },      \
         [SC_TRI_MOLLER] = { .closest = closest_moller, .any = any_moller,                             \
-                            .closest_incoherent = closest_incoherent_moller,                          \
+                            .closest_incoherent = closest_incoherent_moller, .closest_adaptive = closest_adaptive_moller,                          \
                             .any_incoherent = any_incoherent_moller,                                  \
                             .closest_stats = closest_stats_moller, .any_stats = any_stats_moller SC_TRACE_TOP },   \
         [SC_TRI_EXACT] = { .closest = closest_exact, .any = any_exact,                                \
-                           .closest_incoherent = closest_incoherent_exact,                            \
+                           .closest_incoherent = closest_incoherent_exact, .closest_adaptive = closest_adaptive_exact,                            \
                            .any_incoherent = any_incoherent_exact,                                    \
                            .closest_stats = closest_stats_exact, .any_stats = any_stats_exact SC_TRACE_TOP },      \
     }
