@@ -100,7 +100,10 @@ typedef struct sc_trace_stats {
 
 /* Closest hit. Errors: INVALID_ARGUMENT for NULL pointers or a ray with a
  * NaN/infinite direction, a zero direction, an origin coordinate of
- * magnitude >= 1e18 (or NaN), tmin < 0 or NaN, or NaN tmax. */
+ * magnitude >= 1e18 (or NaN), tmin < 0 or NaN, or NaN tmax. The kernel it
+ * runs is chosen from the calling thread's recent rays (whether their
+ * direction octants keep changing, as random and diffuse rays do): that
+ * changes the speed only, never the hit. */
 SC_API sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
                                   sc_trace_stats *stats);
 
