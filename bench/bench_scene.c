@@ -33,6 +33,7 @@
 
 #include "common/sc_clock.h"
 #include "common/sc_median.h"
+#include "common/sc_names.h"
 #include "common/sc_rng.h"
 #include "spherecull/sc_accel.h"
 #include "spherecull/sc_embree.h"
@@ -41,8 +42,10 @@
 static atomic_llong embree_bytes;
 /* Each timed run repeats its ray set until it has run this long (--min-time). */
 static double min_time = 0.2;
-/* --rows: the instancing rows to time (NULL: all) */
-static const char *rows_wanted;
+/* The instancing table's rows, and those --rows asks for (bit i: row_names[i]) */
+static const char *const row_names[] = { "primary", "shadow", "diffuse", "primary16", "shadow16", "diffuse16" };
+enum { ROW_COUNT = sizeof row_names / sizeof row_names[0] };
+static unsigned rows_wanted = (1u << ROW_COUNT) - 1;
 /* Our builds and refits: the default configuration on --threads threads. */
 static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
@@ -263,22 +266,11 @@ static double run_embree16(RTCScene scene, const sc_ray *rays, size_t n, int sha
     return sc_now_seconds() - t0;
 }
 
-/* Whether --rows names row `name` (a whole item of its list). */
+/* Whether --rows asks for row `name`. */
 static int row_wanted(const char *name)
 {
-    if (!rows_wanted)
-        return 1;
-    const size_t n = strlen(name);
-    for (const char *p = rows_wanted; *p;) {
-        const char *e = strchr(p, ',');
-        const size_t len = e ? (size_t)(e - p) : strlen(p);
-        if (len == n && !strncmp(p, name, n))
-            return 1;
-        if (!e)
-            break;
-        p = e + 1;
-    }
-    return 0;
+    int v;
+    return sc_enum_lookup(row_names, ROW_COUNT, name, &v) == 0 && (rows_wanted >> v & 1);
 }
 
 /* Paired repeats of one ray set; prints one row. packet: 16-ray packets
@@ -589,28 +581,29 @@ int main(int argc, char **argv)
         case 'k': refits = atoi(optarg); break;
         case 't': threads = atoi(optarg); break;
         case 'T': min_time = atof(optarg); break;
-        case 'R': rows_wanted = optarg; break;
+        case 'R': {
+            /* a copy for strtok_r, as the CLI's comma lists */
+            char buf[256];
+            if (snprintf(buf, sizeof buf, "%s", optarg) >= (int)sizeof buf)
+                die("--rows: list too long");
+            char *save = NULL;
+            rows_wanted = 0;
+            for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+                int v;
+                if (sc_enum_lookup(row_names, ROW_COUNT, tok, &v) != 0)
+                    die("--rows: names among primary, shadow, diffuse, primary16, shadow16, diffuse16");
+                rows_wanted |= 1u << v;
+            }
+            if (!rows_wanted)
+                die("--rows: an empty list");
+            break;
+        }
         default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST]");
         }
     }
     if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1 ||
         !(min_time >= 0 && min_time <= 60))
         die("bad option value (the image size in multiples of 4)");
-    if (rows_wanted) {
-        static const char *const known[] = { "primary", "shadow", "diffuse", "primary16", "shadow16", "diffuse16" };
-        for (const char *p = rows_wanted;;) {
-            const char *e = strchr(p, ',');
-            const size_t len = e ? (size_t)(e - p) : strlen(p);
-            int ok = 0;
-            for (size_t i = 0; i < sizeof known / sizeof *known; i++)
-                ok |= strlen(known[i]) == len && !strncmp(known[i], p, len);
-            if (!ok)
-                die("--rows: names among primary, shadow, diffuse, primary16, shadow16, diffuse16");
-            if (!e)
-                break;
-            p = e + 1;
-        }
-    }
     sc_bvh_config_default(&build_cfg);
     build_cfg.threads = threads;
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);

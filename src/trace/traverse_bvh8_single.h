@@ -423,16 +423,19 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
         [SC_TRI_WATERTIGHT] = { .closest = closest_watertight, .any = any_watertight,                 \
-                                .closest_incoherent = closest_incoherent_watertight, .closest_adaptive = closest_adaptive_watertight,                  \
+                                .closest_incoherent = closest_incoherent_watertight,                  \
+                                .closest_adaptive = closest_adaptive_watertight,                      \
                                 .any_incoherent = any_incoherent_watertight,                          \
                                 .closest_stats = closest_stats_watertight,                            \
                                 .any_stats = any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT SC_TRACE_TOP },      \
         [SC_TRI_MOLLER] = { .closest = closest_moller, .any = any_moller,                             \
-                            .closest_incoherent = closest_incoherent_moller, .closest_adaptive = closest_adaptive_moller,                          \
+                            .closest_incoherent = closest_incoherent_moller,                          \
+                            .closest_adaptive = closest_adaptive_moller,                              \
                             .any_incoherent = any_incoherent_moller,                                  \
                             .closest_stats = closest_stats_moller, .any_stats = any_stats_moller SC_TRACE_TOP },   \
         [SC_TRI_EXACT] = { .closest = closest_exact, .any = any_exact,                                \
-                           .closest_incoherent = closest_incoherent_exact, .closest_adaptive = closest_adaptive_exact,                            \
+                           .closest_incoherent = closest_incoherent_exact,                            \
+                           .closest_adaptive = closest_adaptive_exact,                                \
                            .any_incoherent = any_incoherent_exact,                                    \
                            .closest_stats = closest_stats_exact, .any_stats = any_stats_exact SC_TRACE_TOP },      \
     }
