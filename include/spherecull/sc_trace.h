@@ -164,9 +164,11 @@ SC_API sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], cons
  * int32_t 1/0 per ray), like rtcIntersect1M / rtcOccluded1M. A run of 16
  * consecutive rays whose directions are close (camera tiles, shadow rays to
  * one light) or whose origins are close (a pixel tile's bounces) is traced
- * as one packet (sc_trace_closest16); other runs ray by ray. Keep
- * neighbours in the array neighbours in space to gain. Results are those
- * of the single-ray calls, bit for bit.
+ * as one packet (sc_trace_closest16); other runs ray by ray, or, in a tree
+ * larger than the caches (8 MiB of nodes and leaves), several rays at a
+ * time with their memory loads overlapping. Keep neighbours in the array
+ * neighbours in space, and hand over many rays per call, to gain. Results
+ * are those of the single-ray calls, bit for bit.
  * flags: 0 (reserved). A ray sc_trace_closest would refuse gets no result
  * and makes the call return INVALID_ARGUMENT after tracing the others. */
 SC_API sc_status sc_trace_closest_n(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, sc_hitrec *hits,

@@ -301,6 +301,7 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
                 bvh->prefetch = tree >= SC_PREFETCH_ALL_BYTES       ? SC_PREFETCH_ALL
                                 : tree >= SC_PREFETCH_CLOSEST_BYTES ? SC_PREFETCH_CLOSEST
                                                                     : SC_PREFETCH_NONE;
+                bvh->interleave = tree >= SC_INTERLEAVE_BYTES;
             }
         }
         root_nodes = B.node_used;

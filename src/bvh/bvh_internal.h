@@ -23,6 +23,7 @@ struct sc_bvh {
                                     triangles where the high quality's spatial splits cut some */
     int depth;
     int prefetch;                /* sc_prefetch_level: which traversals prefetch the children they push */
+    int interleave;              /* streams trace their incoherent rays interleaved (SC_INTERLEAVE_BYTES) */
     double sah_cost, build_seconds;
     double built_sah_cost;       /* sah_cost when built; a refit changes sah_cost only */
     sc_bvh_config cfg;
@@ -46,6 +47,17 @@ struct sc_bvh {
 #define SC_PREFETCH_ALL_BYTES ((size_t)8 << 20)
 #endif
 typedef enum sc_prefetch_level { SC_PREFETCH_NONE, SC_PREFETCH_CLOSEST, SC_PREFETCH_ALL } sc_prefetch_level;
+
+/* From this size a stream traces the rays it cannot group into packets a
+ * few at a time, their memory loads overlapping (traverse_interleaved,
+ * traverse_bvh8_single.h). Below it the tree's loads come from the caches
+ * and the slots' bookkeeping (15 % more instructions) is not paid back:
+ * random rays measured 0.79-0.91 of one by one on 66k-100k-triangle meshes
+ * (trees of 3.6-5.4 MB), 1.07-1.57 on trees of 8.6 MB to 220 MB
+ * (docs/compare.md, twenty-third session). */
+#ifndef SC_INTERLEAVE_BYTES
+#define SC_INTERLEAVE_BYTES ((size_t)8 << 20)
+#endif
 
 /* The mesh that holds global triangle id tri (first[] ascending). */
 static inline size_t sc_mesh_of(const uint32_t *first, size_t mesh_count, uint32_t tri)

@@ -231,10 +231,28 @@ static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, co
     return dir_far && org_far;
 }
 
+/* The incoherent rays of a stream waiting for the target's batch kernel:
+ * the more rays it has in hand, the longer its slots stay full. */
+#define SC_STREAM_QUEUE 256
+typedef struct stream_queue {
+    unsigned n;
+    const sc_ray *ray[SC_STREAM_QUEUE];
+    void *out[SC_STREAM_QUEUE];
+} stream_queue;
+
+static void queue_flush(const sc_stream_target *T, stream_queue *q, int any)
+{
+    if (q->n)
+        T->batch(T->obj, q->ray, q->out, q->n, any);
+    q->n = 0;
+}
+
 /* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
- * by one (which answers the others). */
+ * by one (which answers the others), or into the queue q (when the target
+ * has a batch kernel and no statistics are asked for). */
 static sc_status stream_packet(const sc_stream_target *T, const char *rays, size_t ray_stride, char *out,
-                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any)
+                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any,
+                               stream_queue *q)
 {
 #define RAY(j) ((const sc_ray *)(const void *)(rays + (base + (j)) * ray_stride))
 #define OUT(j) (out + (base + (j)) * out_stride)
@@ -274,9 +292,14 @@ one_by_one:;
     /* rays the coherence tests sent alone, or a run with a refused ray
      * (whose others are answered here) */
     sc_status status = SC_OK;
-    for (unsigned i = 0; i < cnt; i++)
-        if (T->single(T->obj, RAY(i), OUT(i), any, 1, stats) != SC_OK)
+    for (unsigned i = 0; i < cnt; i++) {
+        if (q && sc_ray_valid(RAY(i))) {
+            q->ray[q->n] = RAY(i), q->out[q->n] = OUT(i);
+            q->n++;
+        } else if (T->single(T->obj, RAY(i), OUT(i), any, 1, stats) != SC_OK) {
             status = SC_ERR_INVALID_ARGUMENT;
+        }
+    }
     return status;
 #undef RAY
 #undef OUT
@@ -286,13 +309,19 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
                         size_t out_stride, size_t n, sc_trace_stats *stats, int any)
 {
     sc_status status = SC_OK;
+    stream_queue queue, *q = T->batch && !stats ? &queue : NULL;
+    queue.n = 0;
     for (size_t base = 0; base < n; base += 16) {
         const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
         sc_status st = stream_packet(T, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
-                                     stats, any);
+                                     stats, any, q);
         if (st != SC_OK)
             status = st;
+        if (q && q->n > SC_STREAM_QUEUE - 16)
+            queue_flush(T, q, any);
     }
+    if (q)
+        queue_flush(T, q, any);
     return status;
 }
 
@@ -326,13 +355,24 @@ static sc_status bvh_single(const void *obj, const sc_ray *ray, void *out, int a
     return st;
 }
 
+static void bvh_batch(const void *obj, const sc_ray *const *rays, void *const *outs, unsigned n, int any)
+{
+    const sc_bvh *bvh = obj;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    if (any)
+        k->any_interleaved(bvh, rays, outs, n);
+    else
+        k->closest_interleaved(bvh, rays, outs, n);
+}
+
 static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
                         size_t n, unsigned flags, sc_trace_stats *stats, int any)
 {
     if (!bvh || (n && (!rays || !out)) || ray_stride < sizeof(sc_ray) ||
         out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || flags != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single };
+    const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single,
+                                 bvh->interleave ? bvh_batch : NULL };
     return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, stats, any);
 }
 

@@ -35,6 +35,11 @@ typedef struct sc_trace_kernels {
      * (traverse_adaptive): what sc_trace_closest calls. */
     void (*closest_adaptive)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit);
     int (*any_incoherent)(const sc_bvh *bvh, const sc_ray *ray);
+    /* rays[0..n) (checked rays) traced a few at a time, their loads
+     * overlapping (traverse_interleaved); outs[i]: an sc_hitrec, or an
+     * int32_t for any-hit. The same answers as the calls above. */
+    void (*closest_interleaved)(const sc_bvh *bvh, const sc_ray *const *rays, void *const *hits, unsigned n);
+    void (*any_interleaved)(const sc_bvh *bvh, const sc_ray *const *rays, void *const *occluded, unsigned n);
     void (*closest_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);
     int (*any_stats)(const sc_bvh *bvh, const sc_ray *ray, sc_trace_stats *st);
     /* Packets (lanes: the valid lanes, rays checked; st may be NULL). NULL

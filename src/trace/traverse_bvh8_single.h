@@ -44,6 +44,123 @@ SC_TRAVERSE_INLINE void sc_prefetch_ref(const sc_bvh *bvh, uint64_t ref)
     __builtin_prefetch(p + 192);
 }
 
+/* The closest hit so far of the watertight and Moller tests (the exact
+ * test keeps an sc_exact_hit): its id, barycentrics, and the leaf rows and
+ * lane it came from, for its normal. t is the traversal's tmax. */
+typedef struct sc_best_hit {
+    uint32_t prim;
+    float u, v;
+    const float *rows;
+    unsigned W, lane;
+} sc_best_hit;
+
+/* One leaf of a traversal: its spheres or summary (when it has them), then
+ * its triangles against [tmin, *tmax]; the closest hit goes to *best (or
+ * *xb for the exact test) and *tmax shrinks to it. Returns 1 when an
+ * any-hit ray has found its hit. cur: the ray, whose tmax this sets for
+ * the sphere test. */
+SC_TRAVERSE_INLINE int leaf_visit(const sc_bvh *bvh, const trace_ctx *ctx, const sc_ray *ray, sc_ray *cur,
+                                  uint64_t ref, float tmin, float *tmaxp, sc_best_hit *best, sc_exact_hit *xbp,
+                                  sc_trace_stats *st, const int ANY, const int STATS, const int TEST)
+{
+    float tmax = *tmaxp;
+    const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+    const float *block = sc_leaf_block(bvh->leaves, ref);
+    const float *rows = sc_leaf_rows(block, W, ref);
+    unsigned live = (1u << n) - 1;
+    if (STATS)
+        st->leaves++;
+    if (ref & (SC_REF_SPHERES | SC_REF_SUMMARY)) {
+        cur->tmax = tmax;
+        uint32_t rej = (sc_ref_has_spheres(ref) ? sphere_reject(cur, block, W) : summary_reject(cur, block, W)) & live;
+        if (STATS) {
+            st->sphere_tests += n;
+            st->sphere_rejects += (uint64_t)__builtin_popcount(rej);
+        }
+        live &= ~rej;
+    }
+    if (!live)
+        return 0;
+    float t[16] __attribute__((aligned(64)));
+    float un[16] __attribute__((aligned(64)));
+    float vn[16] __attribute__((aligned(64)));
+    float den[16] __attribute__((aligned(64)));
+    float te[16] __attribute__((aligned(64)));
+    if (STATS)
+        st->tri_tests += (uint64_t)__builtin_popcount(live);
+    unsigned hm = leaf_test(ctx, rows, W, live, tmin, tmax, TEST, t, te, un, vn, den);
+    if (TEST == SC_TRI_EXACT) {
+        sc_exact_hit *xb = xbp;
+        for (; hm; hm &= hm - 1) {
+            unsigned i = (unsigned)__builtin_ctz(hm);
+            int take;
+            float lo, hi;
+            if (te[i] >= 0 && sc_exact_fast(ray, t[i], te[i], xb, &take, &lo, &hi)) {
+                if (STATS)
+                    st->tri_hits++;
+                if (ANY)
+                    return 1;
+                if (take) {
+                    xb->have = 1, xb->refined = 0;
+                    xb->prim = sc_leaf_prims(rows, W)[i];
+                    xb->rows = rows, xb->W = W, xb->lane = i;
+                    xb->lo = lo, xb->hi = hi;
+                    xb->t = t[i], xb->u = un[i] * den[i], xb->v = vn[i] * den[i];
+                    tmax = hi;
+                }
+                continue;
+            }
+            unsigned nh = sc_exact_resolve(ray, rows, W, 1u << i, t, te, un, vn, den, ANY, xb);
+            if (STATS)
+                st->tri_hits += nh;
+            if (ANY && nh)
+                return 1;
+            if (!ANY && xb->have)
+                tmax = xb->hi;
+        }
+    } else if (hm) {
+        if (STATS)
+            st->tri_hits += (uint64_t)__builtin_popcount(hm);
+        if (ANY)
+            return 1;
+        const uint32_t *prims = sc_leaf_prims(rows, W);
+        const unsigned bi = sc_nearest_lane(hm, t, prims);
+        /* t[bi] <= tmax; of equal t the smaller id, so that the answer
+         * does not depend on the order of the leaves (packets visit them
+         * in another order) */
+        if (t[bi] < tmax || prims[bi] < best->prim) {
+            tmax = t[bi];
+            best->prim = prims[bi];
+            best->u = un[bi] / den[bi];
+            best->v = vn[bi] / den[bi];
+            best->rows = rows, best->W = W, best->lane = bi;
+        }
+    }
+    *tmaxp = tmax;
+    return 0;
+}
+
+/* A closest-hit traversal's answer into *hit (any-hit traversals have
+ * nothing to write). */
+SC_TRAVERSE_INLINE void traverse_finish(const sc_ray *ray, sc_hitrec *hit, float tmax, const sc_best_hit *best,
+                                        sc_exact_hit *xb, const int ANY, const int TEST)
+{
+    if (TEST == SC_TRI_EXACT && !ANY) {
+        sc_exact_finish(ray, xb);
+        hit->prim = xb->have ? xb->prim : SC_HITREC_MISS;
+        hit->t = xb->have ? xb->t : ray->tmax;
+        hit->u = xb->have ? xb->u : 0;
+        hit->v = xb->have ? xb->v : 0;
+        sc_hit_ids_normal(hit, xb->have ? xb->rows : NULL, xb->W, xb->lane);
+    } else if (!ANY) {
+        hit->prim = best->prim;
+        hit->t = best->prim == SC_HITREC_MISS ? ray->tmax : tmax;
+        hit->u = best->u;
+        hit->v = best->v;
+        sc_hit_ids_normal(hit, best->rows, best->W, best->lane);
+    }
+}
+
 SC_TRAVERSE_INLINE int
 traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st,
                 const int ANY, const int STATS, const int TEST, const int OCT, const uint64_t root)
@@ -68,10 +185,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
     float tmax = ray->tmax;
     const int prefetch = bvh->prefetch >= (ANY ? SC_PREFETCH_ALL : SC_PREFETCH_CLOSEST);
     sc_ray cur = *ray;
-    uint32_t best_prim = SC_HITREC_MISS;
-    float best_u = 0, best_v = 0;
-    const float *best_rows = NULL;     /* the best hit's leaf rows and lane, for its normal */
-    unsigned best_w = 0, best_lane = 0;
+    sc_best_hit best = { SC_HITREC_MISS, 0, 0, NULL, 0, 0 };
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
     if (STATS)
@@ -118,80 +232,8 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
             }
             ref = SC_ORDER_CHILDREN(node, m, dist, stack, &sp);
         }
-        {
-            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
-            const float *block = sc_leaf_block(bvh->leaves, ref);
-            const float *rows = sc_leaf_rows(block, W, ref);
-            unsigned live = (1u << n) - 1;
-            if (STATS)
-                st->leaves++;
-            if (ref & (SC_REF_SPHERES | SC_REF_SUMMARY)) {
-                cur.tmax = tmax;
-                uint32_t rej = (sc_ref_has_spheres(ref) ? sphere_reject(&cur, block, W)
-                                                        : summary_reject(&cur, block, W)) & live;
-                if (STATS) {
-                    st->sphere_tests += n;
-                    st->sphere_rejects += (uint64_t)__builtin_popcount(rej);
-                }
-                live &= ~rej;
-            }
-            if (live) {
-                float t[16] __attribute__((aligned(64)));
-                float un[16] __attribute__((aligned(64)));
-                float vn[16] __attribute__((aligned(64)));
-                float den[16] __attribute__((aligned(64)));
-                float te[16] __attribute__((aligned(64)));
-                if (STATS)
-                    st->tri_tests += (uint64_t)__builtin_popcount(live);
-                unsigned hm = leaf_test(&ctx, rows, W, live, tmin, tmax, TEST, t, te, un, vn, den);
-                if (TEST == SC_TRI_EXACT) {
-                    for (; hm; hm &= hm - 1) {
-                        unsigned i = (unsigned)__builtin_ctz(hm);
-                        int take;
-                        float lo, hi;
-                        if (te[i] >= 0 && sc_exact_fast(ray, t[i], te[i], &xb, &take, &lo, &hi)) {
-                            if (STATS)
-                                st->tri_hits++;
-                            if (ANY)
-                                return 1;
-                            if (take) {
-                                xb.have = 1, xb.refined = 0;
-                                xb.prim = sc_leaf_prims(rows, W)[i];
-                                xb.rows = rows, xb.W = W, xb.lane = i;
-                                xb.lo = lo, xb.hi = hi;
-                                xb.t = t[i], xb.u = un[i] * den[i], xb.v = vn[i] * den[i];
-                                tmax = hi;
-                            }
-                            continue;
-                        }
-                        unsigned nh = sc_exact_resolve(ray, rows, W, 1u << i, t, te, un, vn, den, ANY, &xb);
-                        if (STATS)
-                            st->tri_hits += nh;
-                        if (ANY && nh)
-                            return 1;
-                        if (!ANY && xb.have)
-                            tmax = xb.hi;
-                    }
-                } else if (hm) {
-                    if (STATS)
-                        st->tri_hits += (uint64_t)__builtin_popcount(hm);
-                    if (ANY)
-                        return 1;
-                    const uint32_t *prims = sc_leaf_prims(rows, W);
-                    const unsigned bi = sc_nearest_lane(hm, t, prims);
-                    /* t[bi] <= tmax; of equal t the smaller id, so that the
-                     * answer does not depend on the order of the leaves
-                     * (packets visit them in another order) */
-                    if (t[bi] < tmax || prims[bi] < best_prim) {
-                        tmax = t[bi];
-                        best_prim = prims[bi];
-                        best_u = un[bi] / den[bi];
-                        best_v = vn[bi] / den[bi];
-                        best_rows = rows, best_w = W, best_lane = bi;
-                    }
-                }
-            }
-        }
+        if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST))
+            return 1;
     pop:
         do {
             if (sp == 0)
@@ -201,22 +243,7 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
         ref = stack[sp].ref;
     }
 done:
-    if (TEST == SC_TRI_EXACT && !ANY) {
-        sc_exact_finish(ray, &xb);
-        hit->prim = xb.have ? xb.prim : SC_HITREC_MISS;
-        hit->t = xb.have ? xb.t : ray->tmax;
-        hit->u = xb.have ? xb.u : 0;
-        hit->v = xb.have ? xb.v : 0;
-        sc_hit_ids_normal(hit, xb.have ? xb.rows : NULL, xb.W, xb.lane);
-        return 0;
-    }
-    if (!ANY) {
-        hit->prim = best_prim;
-        hit->t = best_prim == SC_HITREC_MISS ? ray->tmax : tmax;
-        hit->u = best_u;
-        hit->v = best_v;
-        sc_hit_ids_normal(hit, best_prim == SC_HITREC_MISS ? NULL : best_rows, best_w, best_lane);
-    }
+    traverse_finish(ray, hit, tmax, &best, &xb, ANY, TEST);
     return 0;
 }
 
@@ -264,6 +291,117 @@ SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_
     if (sc_ray_parallel(r))
         return traverse_single(b, r, h, NULL, ANY, 0, TEST, -2, root);
     return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
+}
+
+/* A stream's incoherent rays, several at a time (SC_INTERLEAVE slots).
+ * One ray's traversal is a chain of dependent loads: a node's boxes decide
+ * which node is loaded next, and in a tree larger than the caches each of
+ * those loads waits for memory while the core has nothing else to do.
+ * Here each slot holds one ray's whole traversal state; a step tests one
+ * node or one leaf of one slot, starts loading what that slot visits next,
+ * and moves on to the next slot, so the loads of different rays overlap
+ * (the software form of what a GPU does with threads; "asynchronous
+ * memory access chaining" in the database literature). Every ray takes the
+ * same steps as in traverse_incoherent, in the same order, so it gets the
+ * same hit bit for bit; only the interleaving of different rays differs. */
+#ifndef SC_INTERLEAVE
+#define SC_INTERLEAVE 4
+#endif
+
+typedef struct sc_interleave_slot {
+    trace_ctx ctx;
+    sc_ray ray, cur;                  /* the ray, and its copy for the sphere test */
+    float tmax;
+    int sp;
+    uint64_t ref;                     /* what the next step visits */
+    unsigned idx;                     /* the ray's place in the batch */
+    sc_best_hit best;
+    sc_exact_hit xb;
+    sc_stack_entry stack[SC_TRACE_STACK];
+} sc_interleave_slot;
+
+/* One node or leaf of slot q's traversal. 0: more to do (q->ref is
+ * loading); 1: done; 2: an any-hit ray found its hit. */
+SC_TRAVERSE_INLINE int interleave_step(const sc_bvh *bvh, sc_interleave_slot *q, const int ANY, const int TEST)
+{
+    const uint64_t ref = q->ref;
+    if (!sc_ref_is_leaf(ref)) {
+        const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+        float dist[SC_BVH_N] __attribute__((aligned(32)));
+        unsigned m = node_test(&q->ctx, node, q->ray.tmin, q->tmax, dist, SC_OCT_ANY, !ANY);
+        if (m) {
+            if ((m & (m - 1)) == 0) {
+                q->ref = node->child[__builtin_ctz(m)];
+            } else if (ANY) {
+                q->ref = node->child[__builtin_ctz(m)];
+                for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
+                    q->stack[q->sp++].ref = node->child[31 - __builtin_clz(m)];
+            } else {
+                q->ref = SC_ORDER_CHILDREN(node, m, dist, q->stack, &q->sp);
+            }
+            sc_prefetch_ref(bvh, q->ref);
+            return 0;
+        }
+    } else if (leaf_visit(bvh, &q->ctx, &q->ray, &q->cur, ref, q->ray.tmin, &q->tmax, &q->best, &q->xb, NULL, ANY,
+                          0, TEST)) {
+        return 2;
+    }
+    do {
+        if (q->sp == 0)
+            return 1;
+        q->sp--;
+    } while (!ANY && q->stack[q->sp].dist > q->tmax);
+    q->ref = q->stack[q->sp].ref;
+    sc_prefetch_ref(bvh, q->ref);
+    return 0;
+}
+
+/* rays[i] (checked rays) -> outs[i] (sc_hitrec, or int32_t for any-hit) */
+SC_TRAVERSE_INLINE void traverse_interleaved(const sc_bvh *b, const sc_ray *const *rays, void *const *outs,
+                                             unsigned n, const int ANY, const int TEST)
+{
+    sc_interleave_slot slot[SC_INTERLEAVE];
+    unsigned next = 0, active = 0;
+    for (;;) {
+        /* the free slots take the next rays; a parallel ray (its own node
+         * test) or any ray of an empty tree goes through alone */
+        while (next < n && active != (1u << SC_INTERLEAVE) - 1) {
+            const sc_ray *r = rays[next];
+            if (!b->has_root || sc_ray_parallel(r)) {
+                const int o = traverse_single(b, r, outs[next], NULL, ANY, 0, TEST, -2, 0);
+                if (ANY)
+                    *(int32_t *)outs[next] = o;
+                next++;
+                continue;
+            }
+            const unsigned k = (unsigned)__builtin_ctz(~active);
+            sc_interleave_slot *q = &slot[k];
+            ctx_init_fast(&q->ctx, r, b, TEST);
+            ctx_set_rows(&q->ctx, r);
+            q->ray = q->cur = *r;
+            q->tmax = r->tmax;
+            q->sp = 0;
+            q->ref = 0;                /* the root, nodes[0] */
+            q->idx = next++;
+            q->best = (sc_best_hit){ SC_HITREC_MISS, 0, 0, NULL, 0, 0 };
+            q->xb.have = 0;
+            active |= 1u << k;
+        }
+        if (!active)
+            return;
+        for (unsigned m = active; m; m &= m - 1) {
+            const unsigned k = (unsigned)__builtin_ctz(m);
+            sc_interleave_slot *q = &slot[k];
+            const int done = interleave_step(b, q, ANY, TEST);
+            if (!done)
+                continue;
+            if (ANY)
+                *(int32_t *)outs[q->idx] = done == 2;
+            else
+                traverse_finish(&q->ray, outs[q->idx], q->tmax, &q->best, &q->xb, 0, TEST);
+            active &= ~(1u << k);
+        }
+    }
 }
 
 /* The public closest-hit call's kernel (sc_trace_closest): which of the
@@ -317,6 +455,15 @@ static SC_TARGET int any_incoherent_watertight(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_incoherent(b, r, NULL, 1, SC_TRI_WATERTIGHT, 0);
 }
+static SC_TARGET void closest_interleaved_watertight(const sc_bvh *b, const sc_ray *const *r, void *const *h,
+                                                      unsigned n)
+{
+    traverse_interleaved(b, r, h, n, 0, SC_TRI_WATERTIGHT);
+}
+static SC_TARGET void any_interleaved_watertight(const sc_bvh *b, const sc_ray *const *r, void *const *o, unsigned n)
+{
+    traverse_interleaved(b, r, o, n, 1, SC_TRI_WATERTIGHT);
+}
 static SC_TARGET void closest_stats_watertight(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
     traverse_single(b, r, h, s, 0, 1, SC_TRI_WATERTIGHT, -1, 0);
@@ -367,6 +514,15 @@ static SC_TARGET int any_incoherent_moller(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_incoherent(b, r, NULL, 1, SC_TRI_MOLLER, 0);
 }
+static SC_TARGET void closest_interleaved_moller(const sc_bvh *b, const sc_ray *const *r, void *const *h,
+                                                      unsigned n)
+{
+    traverse_interleaved(b, r, h, n, 0, SC_TRI_MOLLER);
+}
+static SC_TARGET void any_interleaved_moller(const sc_bvh *b, const sc_ray *const *r, void *const *o, unsigned n)
+{
+    traverse_interleaved(b, r, o, n, 1, SC_TRI_MOLLER);
+}
 static SC_TARGET void closest_stats_moller(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
     traverse_single(b, r, h, s, 0, 1, SC_TRI_MOLLER, -1, 0);
@@ -395,6 +551,15 @@ static SC_TARGET void closest_adaptive_exact(const sc_bvh *b, const sc_ray *r, s
 static SC_TARGET int any_incoherent_exact(const sc_bvh *b, const sc_ray *r)
 {
     return traverse_incoherent(b, r, NULL, 1, SC_TRI_EXACT, 0);
+}
+static SC_TARGET void closest_interleaved_exact(const sc_bvh *b, const sc_ray *const *r, void *const *h,
+                                                      unsigned n)
+{
+    traverse_interleaved(b, r, h, n, 0, SC_TRI_EXACT);
+}
+static SC_TARGET void any_interleaved_exact(const sc_bvh *b, const sc_ray *const *r, void *const *o, unsigned n)
+{
+    traverse_interleaved(b, r, o, n, 1, SC_TRI_EXACT);
 }
 static SC_TARGET void closest_stats_exact(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, sc_trace_stats *s)
 {
@@ -426,16 +591,22 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
                                 .closest_incoherent = closest_incoherent_watertight,                  \
                                 .closest_adaptive = closest_adaptive_watertight,                      \
                                 .any_incoherent = any_incoherent_watertight,                          \
+                                .closest_interleaved = closest_interleaved_watertight,                \
+                                .any_interleaved = any_interleaved_watertight,                        \
                                 .closest_stats = closest_stats_watertight,                            \
                                 .any_stats = any_stats_watertight SC_TRACE_PACKETS_WATERTIGHT SC_TRACE_TOP },      \
         [SC_TRI_MOLLER] = { .closest = closest_moller, .any = any_moller,                             \
                             .closest_incoherent = closest_incoherent_moller,                          \
                             .closest_adaptive = closest_adaptive_moller,                              \
                             .any_incoherent = any_incoherent_moller,                                  \
+                            .closest_interleaved = closest_interleaved_moller,                        \
+                            .any_interleaved = any_interleaved_moller,                                \
                             .closest_stats = closest_stats_moller, .any_stats = any_stats_moller SC_TRACE_TOP },   \
         [SC_TRI_EXACT] = { .closest = closest_exact, .any = any_exact,                                \
                            .closest_incoherent = closest_incoherent_exact,                            \
                            .closest_adaptive = closest_adaptive_exact,                                \
                            .any_incoherent = any_incoherent_exact,                                    \
+                           .closest_interleaved = closest_interleaved_exact,                          \
+                           .any_interleaved = any_interleaved_exact,                                  \
                            .closest_stats = closest_stats_exact, .any_stats = any_stats_exact SC_TRACE_TOP },      \
     }
