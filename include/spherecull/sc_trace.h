@@ -165,7 +165,7 @@ SC_API sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], cons
  * consecutive rays whose directions are close (camera tiles, shadow rays to
  * one light) or whose origins are close (a pixel tile's bounces) is traced
  * as one packet (sc_trace_closest16); other runs ray by ray, or, in a tree
- * larger than the caches (8 MiB of nodes and leaves), several rays at a
+ * larger than the caches (6 MiB of nodes and leaves), several rays at a
  * time with their memory loads overlapping. Keep neighbours in the array
  * neighbours in space, and hand over many rays per call, to gain. Results
  * are those of the single-ray calls, bit for bit.

@@ -48,15 +48,15 @@ struct sc_bvh {
 #endif
 typedef enum sc_prefetch_level { SC_PREFETCH_NONE, SC_PREFETCH_CLOSEST, SC_PREFETCH_ALL } sc_prefetch_level;
 
-/* From this size a stream traces the rays it cannot group into packets a
- * few at a time, their memory loads overlapping (traverse_interleaved,
+/* From this size a stream traces the rays it cannot group into packets
+ * several at a time, their memory loads overlapping (traverse_interleaved,
  * traverse_bvh8_single.h). Below it the tree's loads come from the caches
- * and the slots' bookkeeping (15 % more instructions) is not paid back:
- * random rays measured 0.79-0.91 of one by one on 66k-100k-triangle meshes
- * (trees of 3.6-5.4 MB), 1.07-1.57 on trees of 8.6 MB to 220 MB
- * (docs/compare.md, twenty-third session). */
+ * and the slots' bookkeeping is not paid back. Random rays, interleaved
+ * over one by one (docs/compare.md, twenty-third session): 0.73-0.99 on
+ * the shared meshes with trees of 0.2-5.4 MB, 1.09 on the engine's 6.8 MB,
+ * 1.33-2.1 on trees of 8.6 MB to 440 MB. */
 #ifndef SC_INTERLEAVE_BYTES
-#define SC_INTERLEAVE_BYTES ((size_t)8 << 20)
+#define SC_INTERLEAVE_BYTES ((size_t)6 << 20)
 #endif
 
 /* The mesh that holds global triangle id tri (first[] ascending). */

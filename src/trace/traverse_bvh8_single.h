@@ -293,20 +293,32 @@ SC_TRAVERSE_INLINE int traverse_incoherent(const sc_bvh *b, const sc_ray *r, sc_
     return traverse_single(b, r, h, NULL, ANY, 0, TEST, SC_OCT_ANY, root);
 }
 
-/* A stream's incoherent rays, several at a time (SC_INTERLEAVE slots).
- * One ray's traversal is a chain of dependent loads: a node's boxes decide
- * which node is loaded next, and in a tree larger than the caches each of
- * those loads waits for memory while the core has nothing else to do.
- * Here each slot holds one ray's whole traversal state; a step tests one
- * node or one leaf of one slot, starts loading what that slot visits next,
- * and moves on to the next slot, so the loads of different rays overlap
- * (the software form of what a GPU does with threads; "asynchronous
- * memory access chaining" in the database literature). Every ray takes the
- * same steps as in traverse_incoherent, in the same order, so it gets the
- * same hit bit for bit; only the interleaving of different rays differs. */
+/* A stream's incoherent rays, several at a time (up to SC_INTERLEAVE
+ * slots). One ray's traversal is a chain of dependent loads: a node's
+ * boxes decide which node is loaded next, and in a tree larger than the
+ * caches each of those loads waits for memory while the core has nothing
+ * else to do. Here each slot holds one ray's whole traversal state; a step
+ * tests one node or one leaf of one slot, starts loading what that slot
+ * visits next, and moves on to the next slot, so the loads of different
+ * rays overlap (the software form of what a GPU does with threads;
+ * "asynchronous memory access chaining" in the database literature). Every
+ * ray takes the same steps as in traverse_incoherent, in the same order,
+ * so it gets the same hit bit for bit; only the interleaving of different
+ * rays differs.
+ *
+ * 16 slots: random rays through trees of 13 MB to 440 MB ran 1.30-2.2x
+ * their one-by-one speed with 16, 1.20-2.03x with 8, 1.11-1.56x with 4
+ * (docs/compare.md, twenty-third session). The slots' stacks share one
+ * array of SC_INTERLEAVE_STACK entries sized from the tree's depth (a
+ * stack holds at most 7 entries per level above the node being visited),
+ * so the whole state stays near 45 KB of the caller's stack (the deepest
+ * trees get 4 slots). */
 #ifndef SC_INTERLEAVE
-#define SC_INTERLEAVE 4
+#define SC_INTERLEAVE 16
 #endif
+#define SC_INTERLEAVE_STACK 2048
+_Static_assert(SC_INTERLEAVE_STACK / ((SC_BVH_N - 1) * (SC_BVH_MAX_DEPTH + 1) + SC_BVH_N) >= 2,
+               "two slots in the deepest tree the builder makes");
 
 typedef struct sc_interleave_slot {
     trace_ctx ctx;
@@ -317,7 +329,7 @@ typedef struct sc_interleave_slot {
     unsigned idx;                     /* the ray's place in the batch */
     sc_best_hit best;
     sc_exact_hit xb;
-    sc_stack_entry stack[SC_TRACE_STACK];
+    sc_stack_entry *stack;            /* its part of the shared array */
 } sc_interleave_slot;
 
 /* One node or leaf of slot q's traversal. 0: more to do (q->ref is
@@ -361,11 +373,19 @@ SC_TRAVERSE_INLINE void traverse_interleaved(const sc_bvh *b, const sc_ray *cons
                                              unsigned n, const int ANY, const int TEST)
 {
     sc_interleave_slot slot[SC_INTERLEAVE];
+    sc_stack_entry stacks[SC_INTERLEAVE_STACK];
+    /* b->depth counts the inner nodes on the longest path; order_children
+     * may store 8 entries past the top */
+    const unsigned per = (SC_BVH_N - 1) * ((unsigned)b->depth + 1) + SC_BVH_N;
+    const unsigned slots = SC_INTERLEAVE_STACK / per < SC_INTERLEAVE ? SC_INTERLEAVE_STACK / per : SC_INTERLEAVE;
+    for (unsigned k = 0; k < slots; k++)
+        slot[k].stack = stacks + k * per;
+    const unsigned full = (1u << slots) - 1;
     unsigned next = 0, active = 0;
     for (;;) {
         /* the free slots take the next rays; a parallel ray (its own node
          * test) or any ray of an empty tree goes through alone */
-        while (next < n && active != (1u << SC_INTERLEAVE) - 1) {
+        while (next < n && active != full) {
             const sc_ray *r = rays[next];
             if (!b->has_root || sc_ray_parallel(r)) {
                 const int o = traverse_single(b, r, outs[next], NULL, ANY, 0, TEST, -2, 0);
