@@ -140,6 +140,22 @@ SC_TRAVERSE_INLINE int leaf_visit(const sc_bvh *bvh, const trace_ctx *ctx, const
     return 0;
 }
 
+/* A node's hit children m (two or more): returns the one to visit next and
+ * pushes the others. Closest hit: near first. Any hit ends the search, so
+ * order buys nothing (as in Embree's occlusion traversal): the first in
+ * slot order is visited and the rest pushed from the last slot down, so
+ * they pop in slot order (the builder puts larger boxes first). */
+SC_TRAVERSE_INLINE uint64_t push_children(const sc_bvh_node8 *node, unsigned m, const float *dist,
+                                          sc_stack_entry *stack, int *sp, const int ANY)
+{
+    if (!ANY)
+        return SC_ORDER_CHILDREN(node, m, dist, stack, sp);
+    const uint64_t first = node->child[__builtin_ctz(m)];
+    for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
+        stack[(*sp)++].ref = node->child[31 - __builtin_clz(m)];
+    return first;
+}
+
 /* A closest-hit traversal's answer into *hit (any-hit traversals have
  * nothing to write). */
 SC_TRAVERSE_INLINE void traverse_finish(const sc_ray *ray, sc_hitrec *hit, float tmax, const sc_best_hit *best,
@@ -214,23 +230,12 @@ traverse_single(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_s
             /* In a large tree every hit child's first four cache lines
              * start loading now, as in Embree: the ones pushed are in
              * cache when they are popped, instead of each pop waiting for
-             * memory. */
+             * memory. Most subtrees a blocked shadow ray pushes are never
+             * popped: hence any-hit rays prefetch only in the largest trees. */
             if (prefetch)
                 for (unsigned h = m; h; h &= h - 1)
                     sc_prefetch_ref(bvh, node->child[__builtin_ctz(h)]);
-            if (ANY) {
-                /* Any hit ends the search, so order buys nothing (as in
-                 * Embree's occlusion traversal): push all but the first. */
-                ref = node->child[__builtin_ctz(m)];
-                /* Pushed from the last slot down, so they pop in slot order
-                 * (the builder puts larger boxes first). Most pushed
-                 * subtrees of a blocked shadow ray are never popped: hence
-                 * the prefetch above only in the largest trees. */
-                for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
-                    stack[sp++].ref = node->child[31 - __builtin_clz(m)];
-                continue;
-            }
-            ref = SC_ORDER_CHILDREN(node, m, dist, stack, &sp);
+            ref = push_children(node, m, dist, stack, &sp, ANY);
         }
         if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST))
             return 1;
@@ -342,15 +347,8 @@ SC_TRAVERSE_INLINE int interleave_step(const sc_bvh *bvh, sc_interleave_slot *q,
         float dist[SC_BVH_N] __attribute__((aligned(32)));
         unsigned m = node_test(&q->ctx, node, q->ray.tmin, q->tmax, dist, SC_OCT_ANY, !ANY);
         if (m) {
-            if ((m & (m - 1)) == 0) {
-                q->ref = node->child[__builtin_ctz(m)];
-            } else if (ANY) {
-                q->ref = node->child[__builtin_ctz(m)];
-                for (m &= m - 1; m; m &= ~(1u << (31 - __builtin_clz(m))))
-                    q->stack[q->sp++].ref = node->child[31 - __builtin_clz(m)];
-            } else {
-                q->ref = SC_ORDER_CHILDREN(node, m, dist, q->stack, &q->sp);
-            }
+            q->ref = (m & (m - 1)) == 0 ? node->child[__builtin_ctz(m)]
+                                        : push_children(node, m, dist, q->stack, &q->sp, ANY);
             sc_prefetch_ref(bvh, q->ref);
             return 0;
         }
@@ -358,6 +356,10 @@ SC_TRAVERSE_INLINE int interleave_step(const sc_bvh *bvh, sc_interleave_slot *q,
                           0, TEST)) {
         return 2;
     }
+    /* traverse_single's pop, written out in both: as a shared helper it
+     * made GCC compile the single-ray closest-hit loop differently (2.4 KB
+     * larger), where push_children leaves it instruction for instruction
+     * as it was */
     do {
         if (q->sp == 0)
             return 1;
