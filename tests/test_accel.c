@@ -25,6 +25,7 @@
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_isa.h"
 #include "spherecull/sc_trace.h"
+#include "trace/trace_top.h"
 
 static uint64_t rng_state = 0x1234567ull;
 static double rnd(void)
@@ -890,6 +891,129 @@ static void test_growth(void **state)
     mesh_free(&box);
 }
 
+/* ---- when an object ray needs no check ------------------------------------- */
+
+/* M^-1 (rows 0-2 of inv) and -M^-1 T (column 3) in double, as the scene
+ * computes them; 0 for a singular M. */
+static int inverse_of(const float xfm[12], double inv[12])
+{
+    double m[3][3], c[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            m[i][j] = xfm[4 * i + j];
+    for (int j = 0; j < 3; j++) {
+        const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+        c[0][j] = m[1][j1] * m[2][j2] - m[2][j1] * m[1][j2];
+        c[1][j] = m[2][j1] * m[0][j2] - m[0][j1] * m[2][j2];
+        c[2][j] = m[0][j1] * m[1][j2] - m[1][j1] * m[0][j2];
+    }
+    const double det = m[0][0] * c[0][0] + m[1][0] * c[1][0] + m[2][0] * c[2][0];
+    if (!(fabs(det) > 0) || !isfinite(det))
+        return 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (!isfinite(inv[4 * i + j] = c[j][i] / det))
+                return 0;
+    for (int i = 0; i < 3; i++)
+        inv[4 * i + 3] = -(inv[4 * i] * xfm[3] + inv[4 * i + 1] * xfm[7] + inv[4 * i + 2] * xfm[11]);
+    return 1;
+}
+
+/* sc_top_valid_bounds: a world ray inside the bounds must give a valid
+ * object ray (sc_ray_valid), so the walks may skip the check. The rays
+ * are aimed at each bound from both sides (0.25x to 4x of it): origins
+ * along the row of M^-1 with the largest absolute sum, directions along
+ * it (the largest object direction) and along M x for the sign vector x of
+ * M's largest row (the smallest). Transforms of scales 2^-80 to 2^80, of
+ * condition up to about 2^40, translated up to 1e22, in both MXCSR modes
+ * (test registration). Each bound made 8 times looser fails: a boundary
+ * ray then gives an origin beyond 1e18 or an infinite direction, and (in
+ * the FTZ|DAZ run, where a subnormal component reads as 0) a direction
+ * that rounds to 0. */
+static void test_object_ray_bounds(void **state)
+{
+    (void)state;
+    size_t fast = 0, near_vo = 0, near_vdhi = 0, near_vdlo = 0;
+    for (int trial = 0; trial < 3000; trial++) {
+        float xfm[12];
+        const double scale = ldexp(1, (int)rnd_in(-80, 80));
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < 3; j++)
+                xfm[4 * i + j] = (float)(scale * rnd_in(-1, 1) * (trial % 3 == 0 ? ldexp(1, (int)rnd_in(0, 40)) : 1));
+            xfm[4 * i + 3] = (float)(rnd_in(-1, 1) * pow(10, rnd_in(-5, 22)));
+        }
+        double inv[12];
+        if (!inverse_of(xfm, inv))
+            continue;
+        sc_top_item it;
+        memset(&it, 0, sizeof it);
+        sc_top_valid_bounds(inv, xfm, &it.vo, &it.vdlo, &it.vdhi);
+        /* the rows with the largest absolute sums: of M^-1, and of M */
+        int ia = 0, im = 0;
+        double best_a = -1, best_m = -1;
+        for (int i = 0; i < 3; i++) {
+            const double a = fabs(inv[4 * i]) + fabs(inv[4 * i + 1]) + fabs(inv[4 * i + 2]);
+            const double f = fabs((double)xfm[4 * i]) + fabs((double)xfm[4 * i + 1]) + fabs((double)xfm[4 * i + 2]);
+            if (a > best_a)
+                best_a = a, ia = i;
+            if (f > best_m)
+                best_m = f, im = i;
+        }
+        for (int j = 0; j < 96; j++) {
+            const int kind = j % 3;
+            const double f = pow(2, rnd_in(-2, 2));
+            sc_ray w;
+            w.tmin = 0, w.tmax = INFINITY;
+            float d0[3];
+            random_dir(d0);
+            if (kind == 0) {
+                /* the largest object origin: o_k = om sign(inv[ia][k]) */
+                const double om = it.vo * f;
+                for (int k = 0; k < 3; k++)
+                    w.org[k] = (float)copysign(om, inv[4 * ia + k]), w.dir[k] = d0[k];
+            } else if (kind == 1) {
+                /* the largest object direction */
+                const double dm = it.vdhi * f;
+                for (int k = 0; k < 3; k++)
+                    w.org[k] = 0, w.dir[k] = (float)copysign(dm, inv[4 * ia + k]);
+            } else {
+                /* the smallest: d = c M x, x the signs of M's largest row,
+                 * so M^-1 d = c x and max |d_k| = c F */
+                double x[3], d[3], mx = 0;
+                for (int k = 0; k < 3; k++)
+                    x[k] = copysign(1, (double)xfm[4 * im + k]);
+                for (int i = 0; i < 3; i++) {
+                    d[i] = xfm[4 * i] * x[0] + xfm[4 * i + 1] * x[1] + xfm[4 * i + 2] * x[2];
+                    mx = fmax(mx, fabs(d[i]));
+                }
+                const double c = (double)it.vdlo * f / mx;
+                for (int k = 0; k < 3; k++)
+                    w.org[k] = 0, w.dir[k] = (float)(c * d[k]);
+            }
+            if (!sc_ray_valid(&w))
+                continue;
+            float om, dm;
+            sc_top_ray_extent(&w, &om, &dm);
+            if (!sc_top_surely_valid(&it, om, dm))
+                continue;
+            sc_ray o;
+            sc_top_object_ray(inv, &w, &o);
+            if (!sc_ray_valid(&o))
+                fail_msg("trial %d kind %d: world ray o (%a %a %a) d (%a %a %a) inside the bounds (vo %a vdlo %a "
+                         "vdhi %a) gives an invalid object ray o (%a %a %a) d (%a %a %a)",
+                         trial, kind, w.org[0], w.org[1], w.org[2], w.dir[0], w.dir[1], w.dir[2], it.vo, it.vdlo,
+                         it.vdhi, o.org[0], o.org[1], o.org[2], o.dir[0], o.dir[1], o.dir[2]);
+            fast++;
+            near_vo += kind == 0 && om > it.vo * 0.5f;
+            near_vdhi += kind == 1 && dm > it.vdhi * 0.5f;
+            near_vdlo += kind == 2 && dm < it.vdlo * 2.0f;
+        }
+    }
+    print_message("%zu object rays inside the bounds; within 2x of vo %zu, of vdhi %zu, of vdlo %zu\n", fast, near_vo,
+                  near_vdhi, near_vdlo);
+    assert_true(near_vo > 1000 && near_vdhi > 1000 && near_vdlo > 1000);
+}
+
 /* ---- object rays the tracer refuses ----------------------------------------- */
 
 /* An instance scaled by 2^-70: a world ray from farther than about 1e-3 of
@@ -1322,6 +1446,7 @@ int main(void)
         cmocka_unit_test(test_no_holes),
         cmocka_unit_test(test_packets),
         cmocka_unit_test(test_growth),
+        cmocka_unit_test(test_object_ray_bounds),
         cmocka_unit_test(test_refused_object_rays),
         cmocka_unit_test(test_refit),
         cmocka_unit_test(test_errors),

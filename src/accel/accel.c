@@ -370,7 +370,11 @@ static sc_status build_top(sc_accel *a)
         const sc_bvh *const *slot = (const sc_bvh *const *)(i < a->ninst ? &a->inst[i].obj->bvh : &a->bvh);
         a->items[i] = (sc_top_item){ slot, i < a->ninst ? a->inst[i].inv : NULL,
                                      i < a->ninst ? a->inst[i].cof : NULL,
-                                     i < a->ninst ? (uint32_t)i : SC_INVALID_ID, { 0, 0, 0 }, 0 };
+                                     i < a->ninst ? (uint32_t)i : SC_INVALID_ID, -1, INFINITY, -1,
+                                     { 0, 0, 0 }, 0 };
+        if (i < a->ninst)
+            sc_top_valid_bounds(a->inst[i].inv, a->inst[i].xfm, &a->items[i].vo, &a->items[i].vdlo,
+                                &a->items[i].vdhi);
         const sc_bvh *b = *slot;
         if (!b || !b->has_root)
             continue;

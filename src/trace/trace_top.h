@@ -19,6 +19,7 @@
 #ifndef SPHERECULL_TRACE_TRACE_TOP_H
 #define SPHERECULL_TRACE_TRACE_TOP_H
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -35,6 +36,7 @@ typedef struct sc_top_item {
     const double *inv;           /* 12: world to object, row-major 3x4; NULL: no transform */
     const float *cof;            /* 9: cof(M), row-major: object normals to world */
     uint32_t inst;               /* hit.inst of its hits (SC_INVALID_ID without a transform) */
+    float vo, vdlo, vdhi;        /* its object rays are valid for these world rays (sc_top_valid_bounds) */
     float center[3], half;       /* its world box: centre, half diagonal (packets' coherence test) */
 } sc_top_item;
 
@@ -118,6 +120,69 @@ static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray 
     }
     o->tmin = r->tmin;
     o->tmax = r->tmax;
+}
+
+/* Bounds under which an item's object ray (sc_top_object_ray) is surely
+ * valid (sc_ray_valid), so that the walks need not check it: for a world
+ * ray that is valid, with om = max |o_k| <= vo and vdlo <= dm = max |d_k|
+ * <= vdhi. With A and B the largest absolute row sums of M^-1 and of its
+ * translation column, and F that of M: every object origin component is at
+ * most A om + B and every direction component at most A dm before
+ * rounding, so both stay below half their limits (SC_MAX_ORIGIN, FLT_MAX);
+ * and the largest direction component is at least dm / F exactly, less
+ * 2^-51 A dm for the double arithmetic, so it stays at least 2^-124, a
+ * normal float that denormals-are-zero does not read as 0. The tmin and
+ * tmax are the world ray's. Margins of 2^-20 cover the roundings here; an
+ * ill-conditioned or far-translated instance gets bounds no ray meets, and
+ * its object rays are checked one by one. */
+static inline float sc_round_down_f(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+static inline void sc_top_valid_bounds(const double inv[12], const float xfm[12], float *vo, float *vdlo,
+                                       float *vdhi)
+{
+    double A = 0, B = 0, F = 0;
+    for (int i = 0; i < 3; i++) {
+        const double a = fabs(inv[4 * i]) + fabs(inv[4 * i + 1]) + fabs(inv[4 * i + 2]);
+        const double f = fabs((double)xfm[4 * i]) + fabs((double)xfm[4 * i + 1]) + fabs((double)xfm[4 * i + 2]);
+        A = a > A ? a : A;
+        F = f > F ? f : F;
+        B = fabs(inv[4 * i + 3]) > B ? fabs(inv[4 * i + 3]) : B;
+    }
+    const double slack = 1 + 0x1p-20;
+    *vo = *vdhi = -1;
+    *vdlo = INFINITY;
+    if (!(A > 0 && F > 0 && isfinite(A) && isfinite(B) && isfinite(F)))
+        return;
+    const double o = (0.5 * (double)SC_MAX_ORIGIN / slack - B * slack) / (A * slack);
+    *vo = o > 0 ? sc_round_down_f(o) : -1;
+    *vdhi = sc_round_down_f(0.5 * (double)FLT_MAX / slack / (A * slack));
+    const double g = 1 / (F * slack) - 0x1p-50 * A;
+    if (g > 0) {
+        const double lo = 0x1p-124 * slack / g;
+        const float f = (float)lo;
+        *vdlo = (double)f < lo ? nextafterf(f, INFINITY) : f;
+    }
+}
+
+/* The largest |o_k| and |d_k| of a ray, for sc_top_surely_valid
+ * (compares, not fmaxf: a call at the baseline level). */
+static inline void sc_top_ray_extent(const sc_ray *r, float *om, float *dm)
+{
+    float o = fabsf(r->org[0]), d = fabsf(r->dir[0]);
+    for (int k = 1; k < 3; k++) {
+        const float ok = fabsf(r->org[k]), dk = fabsf(r->dir[k]);
+        o = ok > o ? ok : o;
+        d = dk > d ? dk : d;
+    }
+    *om = o, *dm = d;
+}
+
+static inline int sc_top_surely_valid(const sc_top_item *it, float om, float dm)
+{
+    return (om <= it->vo) & (dm <= it->vdhi) & (dm >= it->vdlo);
 }
 
 /* A hit of a BVH over several meshes (prim a global id) as (geom, prim). */

@@ -38,10 +38,10 @@ static inline void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
 }
 #endif
 
-/* One item against the ray: its hit into *best when better (closest), or
- * 1 if it occludes (any). */
-SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *ray, sc_hitrec *best,
-                                 sc_trace_stats *st, const int ANY)
+/* One item against the ray: its hit into *best when better (closest: then
+ * returns 1), or 1 if it occludes (any). */
+SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *ray, float om, float dm,
+                                 sc_hitrec *best, sc_trace_stats *st, const int ANY)
 {
     const sc_top_item *it = &T->items[item];
     const sc_bvh *b = *it->bvh;
@@ -50,30 +50,33 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
     sc_ray r = *ray;
     if (it->inv) {
         sc_top_object_ray(it->inv, ray, &r);
-        if (!sc_ray_valid(&r))
+        if (!sc_top_surely_valid(it, om, dm) && !sc_ray_valid(&r))
             return 0;
     }
     const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
-    sc_trace_stats s = { 0 };
-    int occ = 0;
-    sc_hitrec h;
     if (ANY) {
-        occ = st ? k->any_stats(b, &r, &s) : k->any(b, &r);
-    } else {
-        r.tmax = sc_top_item_tmax(b, best, ray->tmax);
-        if (st)
-            k->closest_stats(b, &r, &h, &s);
-        else
-            k->closest(b, &r, &h);
-    }
-    if (st)
+        if (!st)
+            return k->any(b, &r);
+        sc_trace_stats s = { 0 };
+        const int occ = k->any_stats(b, &r, &s);
         sc_top_add_counters(st, &s);
-    if (ANY)
         return occ;
-    sc_top_offer(it, b, &h, best);
-    return 0;
+    }
+    sc_hitrec h;
+    r.tmax = sc_top_item_tmax(b, best, ray->tmax);
+    if (st) {
+        sc_trace_stats s = { 0 };
+        k->closest_stats(b, &r, &h, &s);
+        sc_top_add_counters(st, &s);
+    } else {
+        k->closest(b, &r, &h);
+    }
+    return sc_top_offer(it, b, &h, best);
 }
 
+/* The walk keeps the node it is in (a single hit child is entered without
+ * a push), and a closest-hit walk keeps how far boxes are tested
+ * (sc_top_tmax), recomputed only when an item improves the hit. */
 SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitrec *best, sc_trace_stats *st,
                                     const int ANY)
 {
@@ -87,55 +90,47 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     } else {
         top_ctx_init(&ctx, T, ray);
     }
+    float tcull = ANY ? ray->tmax : sc_top_tmax(best, ray->tmax);
+    float om, dm;
+    sc_top_ray_extent(ray, &om, &dm);
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
-    stack[sp].ref = 0;
-    stack[sp].dist = ray->tmin;
-    sp++;
-    while (sp) {
-        const sc_stack_entry e = stack[--sp];
-        const float tmax = ANY ? ray->tmax : sc_top_tmax(best, ray->tmax);
-        if (e.dist > tmax)
-            continue;
-        if (sc_ref_is_leaf(e.ref)) {
-            if (top_visit(T, (uint32_t)(e.ref & 0xffffffffu), ray, best, st, ANY))
-                return 1;
-            continue;
-        }
-        const sc_bvh_node8 *node = &T->nodes[e.ref];
-        if (st)
-            st->nodes++;
-        _Alignas(32) float dist[SC_BVH_N];
-        const unsigned mask = parallel ? sc_top_slab(&tr, node, ray->tmin, tmax, dist)
-                                       : node_test(&ctx, node, ray->tmin, tmax, dist, SC_OCT_ANY, 1);
-        if (!mask)
-            continue;
-        if ((mask & (mask - 1)) == 0) {
-            const int i = __builtin_ctz(mask);
-            stack[sp].ref = node->child[i];
-            stack[sp].dist = dist[i];
-            sp++;
-            continue;
-        }
-        if (ANY) {
-            /* any hit ends the search: no order, as in the BVHs' own walk */
-            for (unsigned m = mask; m; m &= m - 1) {
-                const int i = __builtin_ctz(m);
-                stack[sp].ref = node->child[i];
-                stack[sp].dist = dist[i];
-                sp++;
+    uint64_t ref = 0;                  /* the root, nodes[0] */
+    for (;;) {
+        if (!sc_ref_is_leaf(ref)) {
+            const sc_bvh_node8 *node = &T->nodes[ref];
+            if (st)
+                st->nodes++;
+            _Alignas(32) float dist[SC_BVH_N];
+            const unsigned mask = parallel ? sc_top_slab(&tr, node, ray->tmin, tcull, dist)
+                                           : node_test(&ctx, node, ray->tmin, tcull, dist, SC_OCT_ANY, 1);
+            if (mask) {
+                if ((mask & (mask - 1)) == 0) {
+                    ref = node->child[__builtin_ctz(mask)];
+                } else if (ANY) {
+                    /* any hit ends the search: no distance order; the
+                     * last slot first, then down from the one before it */
+                    const unsigned last = 31 - (unsigned)__builtin_clz(mask);
+                    ref = node->child[last];
+                    for (unsigned m = mask & ~(1u << last); m; m &= m - 1)
+                        stack[sp++].ref = node->child[__builtin_ctz(m)];
+                } else {
+                    ref = sc_order_children(node, mask, dist, stack, &sp);
+                }
+                continue;
             }
-            continue;
+        } else if (top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY)) {
+            if (ANY)
+                return 1;
+            tcull = sc_top_tmax(best, ray->tmax);
         }
-        const uint64_t nearest = sc_order_children(node, mask, dist, stack, &sp);
-        int i = 0;
-        while (node->child[i] != nearest)
-            i++;
-        stack[sp].ref = nearest;
-        stack[sp].dist = dist[i];
-        sp++;
+        do {
+            if (sp == 0)
+                return 0;
+            sp--;
+        } while (!ANY && stack[sp].dist > tcull);
+        ref = stack[sp].ref;
     }
-    return 0;
 }
 
 /* *hit: a miss (t = tmax) on entry, the closest hit on return. */

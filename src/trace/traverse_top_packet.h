@@ -122,7 +122,9 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
         sc_ray r = w;
         if (it->inv) {
             sc_top_object_ray(it->inv, &w, &r);
-            if (!sc_ray_valid(&r))
+            float om, dm;
+            sc_top_ray_extent(&w, &om, &dm);
+            if (!sc_top_surely_valid(it, om, dm) && !sc_ray_valid(&r))
                 continue;
         }
         if (narrow) {
