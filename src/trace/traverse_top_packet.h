@@ -47,6 +47,7 @@ typedef struct top_pk {
     float ordn[3][16] __attribute__((aligned(64)));
     float ordf[3][16] __attribute__((aligned(64)));
     float tcull[16] __attribute__((aligned(64)));   /* sc_top_tmax: how far boxes are tested */
+    float om[16], dm[16];                            /* sc_top_ray_extent of each lane */
     uint32_t negm[3];                                /* lanes with d_k < 0 */
     int uniform, oct;                                /* every lane in octant oct */
     /* a uniform packet's frustum: the extreme rd and offsets over the lanes */
@@ -122,9 +123,7 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
         sc_ray r = w;
         if (it->inv) {
             sc_top_object_ray(it->inv, &w, &r);
-            float om, dm;
-            sc_top_ray_extent(&w, &om, &dm);
-            if (!sc_top_surely_valid(it, om, dm) && !sc_ray_valid(&r))
+            if (!sc_top_surely_valid(it, P->om[l], P->dm[l]) && !sc_ray_valid(&r))
                 continue;
         }
         if (narrow) {
@@ -443,6 +442,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             sc_top_miss(P.tmax[l], &P.best[l]);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
         single |= (uint32_t)sc_ray_parallel(&r) << l;
+        sc_top_ray_extent(&r, &P.om[l], &P.dm[l]);
     }
     uint32_t pl = lanes & ~single;
     if (pl) {
