@@ -1378,6 +1378,26 @@ static void test_packets(void **state)
                                  sc_isa_name((sc_isa)isa), r, g->t, g->prim, want[r].t, want[r].prim);
                     assert_int_equal(*(const int32_t *)(const void *)((const char *)got_occ + r * os), want_occ[r]);
                 }
+                /* single rays after 16 world rays of one octant (the object
+                 * rays take the octant kernels) and after 16 of changing
+                 * octants (the one-body kernels): the same answers */
+                for (int hist = 0; hist < 2; hist++)
+                    for (size_t r = 0; r < N; r += 5) {
+                        for (unsigned w = 0; w < 16; w++) {
+                            const unsigned o = hist ? w % 8 : 6;
+                            const sc_ray warm = { { 0, 0, 0 }, 0, { o & 1 ? -1.0f : 1.0f, o & 2 ? -0.5f : 0.5f,
+                                                                    o & 4 ? -0.25f : 0.25f }, INFINITY };
+                            sc_hitrec wh;
+                            assert_int_equal(sc_accel_closest(a, &warm, &wh, NULL), SC_OK);
+                        }
+                        sc_hitrec one;
+                        assert_int_equal(sc_accel_closest(a, &rays[r], &one, NULL), SC_OK);
+                        if (memcmp(&one, &want[r], sizeof one))
+                            fail_msg("cfg %d scene %d %s ray %zu after %s rays: t %a prim %u inst %u against t %a "
+                                     "prim %u inst %u", cfgi, sc, sc_isa_name((sc_isa)isa), r,
+                                     hist ? "incoherent" : "coherent", one.t, one.prim, one.inst, want[r].t,
+                                     want[r].prim, want[r].inst);
+                    }
             }
             assert_int_equal(sc_isa_force(start), SC_OK);
         }

@@ -445,13 +445,20 @@ static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
     int oct, score;
 } sc_oct_history;
 
-SC_TRAVERSE_INLINE void traverse_adaptive(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int TEST)
+/* The history's update with a ray of octant oct: 1 if the rays have been
+ * changing octants (take the one body). */
+SC_TRAVERSE_INLINE int oct_history_incoherent(int oct)
 {
-    const int oct = ray_octant(r);
     int score = sc_oct_history.score + (oct != sc_oct_history.oct ? 1 : -1);
     score = score < 0 ? 0 : score > 15 ? 15 : score;
     sc_oct_history.score = score, sc_oct_history.oct = oct;
-    if (score >= 8)
+    return score >= 8;
+}
+
+SC_TRAVERSE_INLINE void traverse_adaptive(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int TEST)
+{
+    const int oct = ray_octant(r);
+    if (oct_history_incoherent(oct))
         traverse_incoherent(b, r, h, 0, TEST, 0);
     else
         traverse_octant(b, r, h, 0, TEST, 0, oct);

@@ -39,9 +39,12 @@ static inline void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
 #endif
 
 /* One item against the ray: its hit into *best when better (closest: then
- * returns 1), or 1 if it occludes (any). */
+ * returns 1), or 1 if it occludes (any). INC: the world ray is one of many
+ * in changing directions, so its object rays take the one-body kernel
+ * (closest_incoherent) instead of the octant switch, which such rays
+ * mispredict. */
 SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *ray, float om, float dm,
-                                 sc_hitrec *best, sc_trace_stats *st, const int ANY)
+                                 sc_hitrec *best, sc_trace_stats *st, const int ANY, const int INC)
 {
     const sc_top_item *it = &T->items[item];
     const sc_bvh *b = *it->bvh;
@@ -56,7 +59,7 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
     const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
     if (ANY) {
         if (!st)
-            return k->any(b, &r);
+            return INC ? k->any_incoherent(b, &r) : k->any(b, &r);
         sc_trace_stats s = { 0 };
         const int occ = k->any_stats(b, &r, &s);
         sc_top_add_counters(st, &s);
@@ -68,6 +71,8 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
         sc_trace_stats s = { 0 };
         k->closest_stats(b, &r, &h, &s);
         sc_top_add_counters(st, &s);
+    } else if (INC) {
+        k->closest_incoherent(b, &r, &h);
     } else {
         k->closest(b, &r, &h);
     }
@@ -78,11 +83,16 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
  * a push), and a closest-hit walk keeps how far boxes are tested
  * (sc_top_tmax), recomputed only when an item improves the hit. */
 SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitrec *best, sc_trace_stats *st,
-                                    const int ANY)
+                                    const int ANY, const int INC)
 {
     const int parallel = sc_ray_parallel(ray);
     trace_ctx ctx;
+    /* read only when parallel, set then; GCC cannot see that through the
+     * loop (-Wmaybe-uninitialized), and zeroing it costs every ray */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     sc_top_ray tr;
+#pragma GCC diagnostic pop
     if (parallel) {
         double m;
         memset(&ctx, 0, sizeof ctx);   /* not read: the grown-box test below instead */
@@ -123,7 +133,7 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
                 }
                 continue;
             }
-        } else if (top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY)) {
+        } else if (top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY, INC)) {
             if (ANY)
                 return 1;
             tcull = sc_top_tmax(best, ray->tmax);
@@ -137,16 +147,37 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     }
 }
 
-/* *hit: a miss (t = tmax) on entry, the closest hit on return. */
+/* The walks without statistics, inc as INC above: one copy each for
+ * top_closest and the lanes top_packet sends one by one. */
+static SC_TARGET __attribute__((noinline)) void top_closest_walk(const sc_top *T, const sc_ray *ray, sc_hitrec *hit,
+                                                                 int inc)
+{
+    if (inc)
+        top_traverse(T, ray, hit, NULL, 0, 1);
+    else
+        top_traverse(T, ray, hit, NULL, 0, 0);
+}
+
+static SC_TARGET __attribute__((noinline)) int top_any_walk(const sc_top *T, const sc_ray *ray, int inc)
+{
+    return inc ? top_traverse(T, ray, NULL, NULL, 1, 1) : top_traverse(T, ray, NULL, NULL, 1, 0);
+}
+
+/* *hit: a miss (t = tmax) on entry, the closest hit on return. Which
+ * kernel the object rays take is learnt from the world rays before this
+ * one on the thread, as sc_trace_closest learns it (traverse_adaptive's
+ * history, here of world rays: an object ray's octant also turns with
+ * its instance, so its own history says little). Any-hit rays keep the
+ * octant switch, as sc_trace_any does. */
 static SC_TARGET void top_closest(const sc_top *T, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st)
 {
     if (st)
-        top_traverse(T, ray, hit, st, 0);
+        top_traverse(T, ray, hit, st, 0, 0);
     else
-        top_traverse(T, ray, hit, NULL, 0);
+        top_closest_walk(T, ray, hit, oct_history_incoherent(ray_octant(ray)));
 }
 
 static SC_TARGET int top_any(const sc_top *T, const sc_ray *ray, sc_trace_stats *st)
 {
-    return st ? top_traverse(T, ray, NULL, st, 1) : top_traverse(T, ray, NULL, NULL, 1);
+    return st ? top_traverse(T, ray, NULL, st, 1, 0) : top_any_walk(T, ray, 0);
 }

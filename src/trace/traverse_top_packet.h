@@ -450,13 +450,25 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         if (!top_pk_narrow(&P, T->center, T->half))
             single = lanes, pl = 0;
     }
+    /* lanes in more than one octant (a wide packet of bounce rays): their
+     * object rays take the one-body kernels, as an incoherent run of single
+     * rays does (top_closest) */
+    int inc = 0;
+    for (uint32_t e = single, oct0 = 8; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const uint32_t o = (P.d[0][l] < 0) | (P.d[1][l] < 0) << 1 | (P.d[2][l] < 0) << 2;
+        inc |= oct0 != 8 && o != oct0;
+        oct0 = o;
+    }
     for (uint32_t e = single; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
         if (any)
-            P.occluded[l] = top_any(T, &r, st);
-        else
+            P.occluded[l] = st ? top_any(T, &r, st) : top_any_walk(T, &r, inc);
+        else if (st)
             top_closest(T, &r, &P.best[l], st);
+        else
+            top_closest_walk(T, &r, &P.best[l], inc);
     }
     if (!pl)
         goto done;
