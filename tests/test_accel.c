@@ -21,6 +21,7 @@
 #include "compare/oracle.h"
 #include "sc_ftz.h"
 #include "sc_test_meshes.h"
+#include "sc_test_warm.h"
 #include "spherecull/sc_accel.h"
 #include "spherecull/sc_bvh.h"
 #include "spherecull/sc_isa.h"
@@ -1384,9 +1385,7 @@ static void test_packets(void **state)
                 for (int hist = 0; hist < 2; hist++)
                     for (size_t r = 0; r < N; r += 5) {
                         for (unsigned w = 0; w < 16; w++) {
-                            const unsigned o = hist ? w % 8 : 6;
-                            const sc_ray warm = { { 0, 0, 0 }, 0, { o & 1 ? -1.0f : 1.0f, o & 2 ? -0.5f : 0.5f,
-                                                                    o & 4 ? -0.25f : 0.25f }, INFINITY };
+                            const sc_ray warm = sc_test_warm_ray(hist, w);
                             sc_hitrec wh;
                             assert_int_equal(sc_accel_closest(a, &warm, &wh, NULL), SC_OK);
                         }

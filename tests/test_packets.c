@@ -23,6 +23,7 @@
 #include <cmocka.h>
 
 #include "bvh_test_util.h"
+#include "sc_test_warm.h"
 #include "bvh/bvh_internal.h"
 #include "isa/isa_dispatch.h"
 #include "trace/stream_gather.h"
@@ -459,9 +460,7 @@ static void test_streams_incoherent(void **state)
             for (int hist = 0; hist < 2; hist++)
                 for (size_t i = 0; i < n; i++) {
                     for (unsigned w = 0; w < 16; w++) {
-                        const unsigned o = hist ? w % 8 : 5;
-                        const sc_ray warm = { { 0, 0, 0 }, 0, { o & 1 ? -1.0f : 1.0f, o & 2 ? -0.5f : 0.5f,
-                                                                o & 4 ? -0.25f : 0.25f }, INFINITY };
+                        const sc_ray warm = sc_test_warm_ray(hist, w);
                         sc_hitrec wh;
                         assert_int_equal(sc_trace_closest(bvh, &warm, &wh, NULL), SC_OK);
                     }
