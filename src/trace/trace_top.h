@@ -28,6 +28,7 @@
 #endif
 
 #include "bvh/bvh_internal.h"
+#include "common/sc_round.h"
 #include "ray_setup.h"
 #include "spherecull/sc_hit.h"
 
@@ -73,10 +74,7 @@ static inline void sc_top_growth_consts(sc_top *T)
 {
     const double a = 0x1p-23 * T->kappa * 3.4642 * 1.01 * (1 + 0x1p-20);
     const double b = 0x1p-23 * T->kappa * T->radius * 1.01 * (1 + 0x1p-20) + 0x1p-118;
-    float fa = (float)a, fb = (float)b;
-    fa = fa < a ? nextafterf(fa, INFINITY) : fa;
-    fb = fb < b ? nextafterf(fb, INFINITY) : fb;
-    T->grow_a = fa, T->grow_b = fb;
+    T->grow_a = sc_f32_up(a), T->grow_b = sc_f32_up(b);
 }
 
 /* The growth of the slab distances on an axis with reciprocal rd: E |rd|, rounded up. */
@@ -135,11 +133,6 @@ static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray 
  * tmax are the world ray's. Margins of 2^-20 cover the roundings here; an
  * ill-conditioned or far-translated instance gets bounds no ray meets, and
  * its object rays are checked one by one. */
-static inline float sc_round_down_f(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
 static inline void sc_top_valid_bounds(const double inv[12], const float xfm[12], float *vo, float *vdlo,
                                        float *vdhi)
 {
@@ -157,14 +150,11 @@ static inline void sc_top_valid_bounds(const double inv[12], const float xfm[12]
     if (!(A > 0 && F > 0 && isfinite(A) && isfinite(B) && isfinite(F)))
         return;
     const double o = (0.5 * (double)SC_MAX_ORIGIN / slack - B * slack) / (A * slack);
-    *vo = o > 0 ? sc_round_down_f(o) : -1;
-    *vdhi = sc_round_down_f(0.5 * (double)FLT_MAX / slack / (A * slack));
+    *vo = o > 0 ? sc_f32_down(o) : -1;
+    *vdhi = sc_f32_down(0.5 * (double)FLT_MAX / slack / (A * slack));
     const double g = 1 / (F * slack) - 0x1p-50 * A;
-    if (g > 0) {
-        const double lo = 0x1p-124 * slack / g;
-        const float f = (float)lo;
-        *vdlo = (double)f < lo ? nextafterf(f, INFINITY) : f;
-    }
+    if (g > 0)
+        *vdlo = sc_f32_up(0x1p-124 * slack / g);
 }
 
 /* The largest |o_k| and |d_k| of a ray, for sc_top_surely_valid

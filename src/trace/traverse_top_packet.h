@@ -433,7 +433,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     }
     /* lanes parallel to an axis, and every lane of a packet wide against
      * the whole scene: one by one through the single-ray top level */
-    uint32_t single = 0;
+    uint32_t single = 0, octs = 0;
     for (uint32_t e = lanes; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         if (any)
@@ -442,6 +442,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             sc_top_miss(P.tmax[l], &P.best[l]);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
         single |= (uint32_t)sc_ray_parallel(&r) << l;
+        octs |= 1u << (ray_octant(&r) + 2);   /* -2 (parallel) .. 7 */
         sc_top_ray_extent(&r, &P.om[l], &P.dm[l]);
     }
     uint32_t pl = lanes & ~single;
@@ -450,16 +451,10 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         if (!top_pk_narrow(&P, T->center, T->half))
             single = lanes, pl = 0;
     }
-    /* lanes in more than one octant (a wide packet of bounce rays): their
-     * object rays take the one-body kernels, as an incoherent run of single
-     * rays does (top_closest) */
-    int inc = 0;
-    for (uint32_t e = single, oct0 = 8; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        const uint32_t o = (P.d[0][l] < 0) | (P.d[1][l] < 0) << 1 | (P.d[2][l] < 0) << 2;
-        inc |= oct0 != 8 && o != oct0;
-        oct0 = o;
-    }
+    /* a packet whose lanes span octants (bounce rays): the object rays of
+     * the lanes traced one by one take the one-body kernels, as an
+     * incoherent run of single rays does (top_closest) */
+    const int inc = (octs & (octs - 1)) != 0;
     for (uint32_t e = single; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);

@@ -50,6 +50,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "common/sc_round.h"
 #include "tri_exact.h"
 
 /* ---- exact fixed point ---------------------------------------------------- */
@@ -417,17 +418,6 @@ static int dt_bounds(const sc_ray *r, const dvol *o, double *lo, double *hi, dou
     return 1;
 }
 
-/* float bounds outside the double ones */
-static float f_down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-static float f_up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
 
 /* a hit's exact t is in [tmin, tmax]: keep the rounded one there too */
 static void clamp_t(const sc_ray *r, sc_exact_hit *c)
@@ -452,7 +442,7 @@ static void refine(const sc_ray *r, sc_exact_hit *c, const dvol *o, int report)
 {
     double lo, hi, t, u, v;
     if (dt_bounds(r, o, &lo, &hi, &t, &u, &v)) {
-        float fl = f_down(lo), fh = f_up(hi);
+        float fl = sc_f32_down(lo), fh = sc_f32_up(hi);
         if (fl > c->lo) c->lo = fl;
         if (fh < c->hi) c->hi = fh;
         c->t = (float)t, c->u = (float)u, c->v = (float)v;
