@@ -316,6 +316,17 @@ static void test_isa_identical(void **state)
     size_t n = 30000;
     sc.rays = NULL;
     make_rays(&sc, n, 16);
+    /* Every 8th ray gets one or two direction components at the parallel
+     * test's boundary (1e-18 = SC_MIN_RCP_INPUT takes the octant kernels,
+     * anything smaller the parallel node test), signed zeros included:
+     * each level's choice of kernel (its own octant and parallel test)
+     * must give the scalar answer. */
+    const float tiny[] = { 0.0f, -0.0f, 1e-18f, -1e-18f, nextafterf(1e-18f, 0), -nextafterf(1e-18f, 0), 1e-30f, -3.0f };
+    for (size_t i = 0; i < n; i += 8) {
+        sc.rays[i].dir[i / 8 % 3] = tiny[i / 24 % 8];
+        if (i % 16 == 0)
+            sc.rays[i].dir[(i / 8 + 1) % 3] = tiny[(i / 24 + 3) % 8];
+    }
     sc_hitrec *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
     const int leaves[] = { 3, 4, 8, 12, 16 };
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++)

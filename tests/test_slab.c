@@ -607,9 +607,9 @@ static void test_nodes(void **state)
     assert_int_equal(st.dist_bad_uf, 0);
 }
 
-/* sc_ray_valid against its rule, written out here field by field: tmin
- * >= 0, tmax not NaN, every |o_k| < SC_MAX_ORIGIN, every d_k finite, some
- * d_k != 0. Each field runs through the values next to every boundary
+/* sc_ray_valid and sc_ray_valid_sse against their rule, written out here
+ * field by field: tmin >= 0, tmax not NaN, every |o_k| < SC_MAX_ORIGIN,
+ * every d_k finite, some d_k != 0. Each field runs through the values next to every boundary
  * (signed zeros, subnormals, 1e18 and its neighbours, FLT_MAX, infinities,
  * NaNs) alone, and all fields at once in random combinations. */
 static int ray_valid_rule(const sc_ray *r)
@@ -642,9 +642,10 @@ static void test_ray_valid(void **state)
             fv[f] = vals[v];
             sc_ray r;
             memcpy(&r, fv, sizeof r);
-            const int got = sc_ray_valid(&r), want = ray_valid_rule(&r);
-            if (got != want)
-                fail_msg("field %d = %a: sc_ray_valid %d, the rule %d", f, (double)vals[v], got, want);
+            const int got = sc_ray_valid(&r), want = ray_valid_rule(&r), got_sse = sc_ray_valid_sse(&r);
+            if (got != want || got_sse != want)
+                fail_msg("field %d = %a: sc_ray_valid %d, sc_ray_valid_sse %d, the rule %d", f, (double)vals[v], got,
+                         got_sse, want);
             n++, valid += want;
         }
     sc_rng g;
@@ -656,11 +657,11 @@ static void test_ray_valid(void **state)
             fv[f] = sc_rng_next(&g) % 4 ? (float)sc_rng_range(&g, f == 3 ? 0 : -5, 5) : vals[sc_rng_next(&g) % NV];
         sc_ray r;
         memcpy(&r, fv, sizeof r);
-        const int got = sc_ray_valid(&r), want = ray_valid_rule(&r);
-        if (got != want)
-            fail_msg("ray (%a %a %a) tmin %a (%a %a %a) tmax %a: sc_ray_valid %d, the rule %d", (double)r.org[0],
-                     (double)r.org[1], (double)r.org[2], (double)r.tmin, (double)r.dir[0], (double)r.dir[1],
-                     (double)r.dir[2], (double)r.tmax, got, want);
+        const int got = sc_ray_valid(&r), want = ray_valid_rule(&r), got_sse = sc_ray_valid_sse(&r);
+        if (got != want || got_sse != want)
+            fail_msg("ray (%a %a %a) tmin %a (%a %a %a) tmax %a: sc_ray_valid %d, sc_ray_valid_sse %d, the rule %d",
+                     (double)r.org[0], (double)r.org[1], (double)r.org[2], (double)r.tmin, (double)r.dir[0],
+                     (double)r.dir[1], (double)r.dir[2], (double)r.tmax, got, got_sse, want);
         n++, valid += want;
     }
     print_message("%zu rays, %zu valid\n", n, valid);

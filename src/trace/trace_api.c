@@ -16,7 +16,7 @@
 
 sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *stats)
 {
-    if (!bvh || !ray || !hit || !sc_ray_valid(ray))
+    if (!bvh || !ray || !hit || !sc_ray_valid_sse(ray))
         return SC_ERR_INVALID_ARGUMENT;
     const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
     if (stats)
@@ -28,7 +28,7 @@ sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
 
 sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_trace_stats *stats)
 {
-    if (!bvh || !ray || !occluded || !sc_ray_valid(ray))
+    if (!bvh || !ray || !occluded || !sc_ray_valid_sse(ray))
         return SC_ERR_INVALID_ARGUMENT;
     const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
     *occluded = stats ? k->any_stats(bvh, ray, stats) : k->any(bvh, ray);

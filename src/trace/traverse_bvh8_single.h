@@ -255,12 +255,14 @@ done:
 /* The statistics-free kernels are specialised per ray octant (the signs of
  * the direction pick the near and far box planes at compile time; -2 is a
  * parallel ray); the counting kernels keep one generic body (-1). */
+#ifndef SC_HAVE_RAY_OCTANT     /* a level may bring its own, with these answers */
 SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
 {
     if (sc_ray_parallel(r))
         return -2;
     return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
 }
+#endif
 
 /* The kernel of octant oct (ray_octant's). */
 SC_TRAVERSE_INLINE int traverse_octant(const sc_bvh *b, const sc_ray *r, sc_hitrec *h, const int ANY, const int TEST,
@@ -459,7 +461,8 @@ SC_TRAVERSE_INLINE void traverse_adaptive(const sc_bvh *b, const sc_ray *r, sc_h
 {
     const int oct = ray_octant(r);
     if (oct_history_incoherent(oct))
-        traverse_incoherent(b, r, h, 0, TEST, 0);
+        /* traverse_incoherent, with the parallel test already made */
+        traverse_single(b, r, h, NULL, 0, 0, TEST, oct == -2 ? -2 : SC_OCT_ANY, 0);
     else
         traverse_octant(b, r, h, 0, TEST, 0, oct);
 }

@@ -20,19 +20,27 @@ typedef struct tri_sheared8 {
 SC_X86_INLINE void
 tri_shear8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, tri_sheared8 *s)
 {
-    const int kx = c->kx, ky = c->ky, kz = c->kz;
     const __m256 okx = c->okx, oky = c->oky, okz = c->okz;
     const __m256 Sx = c->Sx, Sy = c->Sy;
-#define LD(j, k) leaf_row8(rows + (3 * (j) + (k)) * W, W, h)
-    __m256 Akz = _mm256_sub_ps(LD(0, kz), okz);
-    __m256 Bkz = _mm256_sub_ps(LD(1, kz), okz);
-    __m256 Ckz = _mm256_sub_ps(LD(2, kz), okz);
-    __m256 Ax = _mm256_sub_ps(_mm256_sub_ps(LD(0, kx), okx), _mm256_mul_ps(Sx, Akz));
-    __m256 Ay = _mm256_sub_ps(_mm256_sub_ps(LD(0, ky), oky), _mm256_mul_ps(Sy, Akz));
-    __m256 Bx = _mm256_sub_ps(_mm256_sub_ps(LD(1, kx), okx), _mm256_mul_ps(Sx, Bkz));
-    __m256 By = _mm256_sub_ps(_mm256_sub_ps(LD(1, ky), oky), _mm256_mul_ps(Sy, Bkz));
-    __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(2, kx), okx), _mm256_mul_ps(Sx, Ckz));
-    __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(2, ky), oky), _mm256_mul_ps(Sy, Ckz));
+    /* The nine rows as two byte offsets each: vertex j's rows start 3W
+     * floats apart, axis k's row is k W floats into them. Written as
+     * (3j + k) W per row, the run-time width and axes cost an imul and a
+     * move per row (35 instructions a leaf); this way three products. */
+    const size_t W4 = (size_t)W * sizeof(float);
+    const char *v0 = (const char *)(const void *)(rows + h), *v1 = v0 + 3 * W4, *v2 = v1 + 3 * W4;
+    const size_t ox = (size_t)c->kx * W4, oy = (size_t)c->ky * W4, oz = (size_t)c->kz * W4;
+#define LD(v, o)                                                                                      \
+    (W == 4 ? _mm256_castps128_ps256(_mm_load_ps((const float *)(const void *)((v) + (o))))            \
+            : _mm256_load_ps((const float *)(const void *)((v) + (o))))
+    __m256 Akz = _mm256_sub_ps(LD(v0, oz), okz);
+    __m256 Bkz = _mm256_sub_ps(LD(v1, oz), okz);
+    __m256 Ckz = _mm256_sub_ps(LD(v2, oz), okz);
+    __m256 Ax = _mm256_sub_ps(_mm256_sub_ps(LD(v0, ox), okx), _mm256_mul_ps(Sx, Akz));
+    __m256 Ay = _mm256_sub_ps(_mm256_sub_ps(LD(v0, oy), oky), _mm256_mul_ps(Sy, Akz));
+    __m256 Bx = _mm256_sub_ps(_mm256_sub_ps(LD(v1, ox), okx), _mm256_mul_ps(Sx, Bkz));
+    __m256 By = _mm256_sub_ps(_mm256_sub_ps(LD(v1, oy), oky), _mm256_mul_ps(Sy, Bkz));
+    __m256 Cx = _mm256_sub_ps(_mm256_sub_ps(LD(v2, ox), okx), _mm256_mul_ps(Sx, Ckz));
+    __m256 Cy = _mm256_sub_ps(_mm256_sub_ps(LD(v2, oy), oky), _mm256_mul_ps(Sy, Ckz));
 #undef LD
     s->Ax = Ax, s->Ay = Ay, s->Bx = Bx, s->By = By, s->Cx = Cx, s->Cy = Cy;
     s->Akz = Akz, s->Bkz = Bkz, s->Ckz = Ckz;
