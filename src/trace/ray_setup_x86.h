@@ -145,20 +145,24 @@ static const size_t sc_rows_of_octant[8][6] = { SC_ROWS_OF(0), SC_ROWS_OF(1), SC
 #undef SC_ROWS_OF
 #undef SC_ROWB
 
-/* The direction's sign bits (bit k: d_k, -0 included), from the register
- * the set-up loads it into anyway. */
-SC_X86_INLINE unsigned ray_sign_bits(const sc_ray *r)
-{
-    return (unsigned)_mm_movemask_ps(_mm_loadu_ps(r->dir)) & 7;
-}
-
 /* The near and far rows of a non-parallel ray whose octant is not a
- * compile-time constant: a table row, not three sign tests. */
-SC_X86_INLINE void ctx_set_rows(trace_ctx *c, const sc_ray *r)
+ * compile-time constant, from its direction's sign bits (bit k: d_k, -0
+ * included; ray_octant's answer): a table row. */
+SC_X86_INLINE void ctx_set_rows_signs(trace_ctx *c, unsigned signs)
 {
-    const size_t *rows = sc_rows_of_octant[ray_sign_bits(r)];
+    const size_t *rows = sc_rows_of_octant[signs & 7];
     for (int k = 0; k < 3; k++)
         c->near_off[k] = rows[k], c->far_off[k] = rows[3 + k];
+}
+
+/* The same from the ray, its signs read as three floats: the top level's
+ * object rays were just stored a float at a time, and a 16-byte load would
+ * wait for those stores before the first node's rows are known (instanced
+ * bounce rays lost 2 % that way: docs/compare.md, twenty-sixth session). */
+SC_X86_INLINE void ctx_set_rows(trace_ctx *c, const sc_ray *r)
+{
+    ctx_set_rows_signs(c, (unsigned)(signbit(r->dir[0]) != 0) | (unsigned)(signbit(r->dir[1]) != 0) << 1 |
+                              (unsigned)(signbit(r->dir[2]) != 0) << 2);
 }
 
 /* ray_octant (traverse_bvh8_single.h) on the direction in one register:

@@ -27,6 +27,10 @@ static inline void ctx_set_rows(trace_ctx *c, const sc_ray *r)
 {
     (void)c, (void)r;
 }
+static inline void ctx_set_rows_signs(trace_ctx *c, unsigned signs)
+{
+    (void)c, (void)signs;
+}
 
 static inline unsigned node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax,
                                  float *dist, const int OCT, const int WANT_DIST)
