@@ -89,10 +89,14 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     trace_ctx ctx;
     /* read only when parallel, set then; GCC cannot see that through the
      * loop (-Wmaybe-uninitialized), and zeroing it costs every ray */
+#if defined(__GNUC__) && !defined(__clang__)   /* clang has no such warning */
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
     sc_top_ray tr;
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
     if (parallel) {
         double m;
         memset(&ctx, 0, sizeof ctx);   /* not read: the grown-box test below instead */
