@@ -321,7 +321,8 @@ static void test_isa_identical(void **state)
      * anything smaller the parallel node test), signed zeros included:
      * each level's choice of kernel (its own octant and parallel test)
      * must give the scalar answer. */
-    const float tiny[] = { 0.0f, -0.0f, 1e-18f, -1e-18f, nextafterf(1e-18f, 0), -nextafterf(1e-18f, 0), 1e-30f, -3.0f };
+    const float tiny[] = { 0.0f, -0.0f, 1e-18f, -1e-18f, nextafterf(1e-18f, 0), -nextafterf(1e-18f, 0),
+                           1e-30f, -3.0f };
     for (size_t i = 0; i < n; i += 8) {
         sc.rays[i].dir[i / 8 % 3] = tiny[i / 24 % 8];
         if (i % 16 == 0)

@@ -609,9 +609,10 @@ static void test_nodes(void **state)
 
 /* sc_ray_valid and sc_ray_valid_sse against their rule, written out here
  * field by field: tmin >= 0, tmax not NaN, every |o_k| < SC_MAX_ORIGIN,
- * every d_k finite, some d_k != 0. Each field runs through the values next to every boundary
- * (signed zeros, subnormals, 1e18 and its neighbours, FLT_MAX, infinities,
- * NaNs) alone, and all fields at once in random combinations. */
+ * every d_k finite, some d_k != 0. Each field runs through the values next
+ * to every boundary (signed zeros, subnormals, 1e18 and its neighbours,
+ * FLT_MAX, infinities, NaNs) alone, and all fields at once in random
+ * combinations. */
 static int ray_valid_rule(const sc_ray *r)
 {
     int ok = !isnan(r->tmax) && r->tmin >= 0;

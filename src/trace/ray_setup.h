@@ -85,6 +85,14 @@ static inline int sc_ray_valid_sse(const sc_ray *r)
 #define sc_ray_valid_sse sc_ray_valid
 #endif
 
+/* The direction's sign bits, bit k for d_k (-0 included): the ray's
+ * octant, read as three floats. */
+SC_TRACE_INLINE unsigned sc_ray_signs(const sc_ray *r)
+{
+    return (unsigned)(signbit(r->dir[0]) != 0) | (unsigned)(signbit(r->dir[1]) != 0) << 1 |
+           (unsigned)(signbit(r->dir[2]) != 0) << 2;
+}
+
 /* 1 iff the ray must take the parallel node test. */
 SC_TRACE_INLINE int sc_ray_parallel(const sc_ray *r)
 {

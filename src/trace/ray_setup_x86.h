@@ -161,8 +161,7 @@ SC_X86_INLINE void ctx_set_rows_signs(trace_ctx *c, unsigned signs)
  * bounce rays lost 2 % that way: docs/compare.md, twenty-sixth session). */
 SC_X86_INLINE void ctx_set_rows(trace_ctx *c, const sc_ray *r)
 {
-    ctx_set_rows_signs(c, (unsigned)(signbit(r->dir[0]) != 0) | (unsigned)(signbit(r->dir[1]) != 0) << 1 |
-                              (unsigned)(signbit(r->dir[2]) != 0) << 2);
+    ctx_set_rows_signs(c, sc_ray_signs(r));
 }
 
 /* ray_octant (traverse_bvh8_single.h) on the direction in one register:
@@ -179,14 +178,22 @@ SC_X86_INLINE int ray_octant(const sc_ray *r)
 }
 #define SC_HAVE_RAY_OCTANT 1
 
-/* Lanes [h, h+8) of a block of width W. For W = 4 the upper lanes are
- * undefined: every result is masked by `live` (< 16), and float garbage
- * cannot trap (exceptions are masked), so the zero-extension is not paid. */
+/* Lanes [h, h+8) of a block of width W (h = 0 for W = 4). On AVX-512 one
+ * masked load for every width (a block of 4's upper lanes zeroed): a
+ * masked load costs what a load costs, where a branch on W, which a tree
+ * mixing leaves of 4 and 8 mispredicts, made the compiler keep two copies
+ * of each leaf test. On AVX2 (whose masked load costs more) a block of 4's
+ * upper lanes are undefined: every result is masked by `live` (< 16), and
+ * float garbage cannot trap (exceptions are masked). */
 SC_X86_INLINE __m256 leaf_row8(const float *row, unsigned W, unsigned h)
 {
+#if SC_X86_AVX512
+    return _mm256_maskz_loadu_ps(W == 4 ? 0x0f : 0xff, row + h);
+#else
     if (W == 4)
         return _mm256_castps128_ps256(_mm_load_ps(row));
     return _mm256_load_ps(row + h);
+#endif
 }
 
 SC_X86_INLINE unsigned

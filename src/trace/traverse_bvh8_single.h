@@ -272,7 +272,7 @@ SC_TRAVERSE_INLINE int ray_octant(const sc_ray *r)
 {
     if (sc_ray_parallel(r))
         return -2;
-    return (signbit(r->dir[0]) != 0) | (signbit(r->dir[1]) != 0) << 1 | (signbit(r->dir[2]) != 0) << 2;
+    return (int)sc_ray_signs(r);
 }
 #endif
 

@@ -29,18 +29,7 @@ tri_shear8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, tri_sh
     const size_t W4 = (size_t)W * sizeof(float);
     const char *v0 = (const char *)(const void *)(rows + h), *v1 = v0 + 3 * W4, *v2 = v1 + 3 * W4;
     const size_t ox = (size_t)c->kx * W4, oy = (size_t)c->ky * W4, oz = (size_t)c->kz * W4;
-#if SC_X86_AVX512
-    /* One body for every width: a block of 4 has its rows loaded with the
-     * upper lanes zeroed (a masked load costs what a load costs), where a
-     * branch on W, which a tree mixing leaves of 4 and 8 mispredicts,
-     * chose between two copies of the test. */
-    const __mmask8 lanes = W == 4 ? 0x0f : 0xff;
-#define LD(v, o) _mm256_maskz_loadu_ps(lanes, (const float *)(const void *)((v) + (o)))
-#else
-#define LD(v, o)                                                                                      \
-    (W == 4 ? _mm256_castps128_ps256(_mm_load_ps((const float *)(const void *)((v) + (o))))            \
-            : _mm256_load_ps((const float *)(const void *)((v) + (o))))
-#endif
+#define LD(v, o) leaf_row8((const float *)(const void *)((v) + (o)), W, 0)
     __m256 Akz = _mm256_sub_ps(LD(v0, oz), okz);
     __m256 Bkz = _mm256_sub_ps(LD(v1, oz), okz);
     __m256 Ckz = _mm256_sub_ps(LD(v2, oz), okz);
