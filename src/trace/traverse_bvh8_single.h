@@ -141,13 +141,22 @@ SC_TRAVERSE_INLINE int leaf_visit(const sc_bvh *bvh, const trace_ctx *ctx, const
 }
 
 /* A node's hit children m (two or more): returns the one to visit next and
- * pushes the others. Closest hit: near first. Any hit ends the search, so
- * order buys nothing (as in Embree's occlusion traversal): the first in
- * slot order is visited and the rest pushed from the last slot down, so
- * they pop in slot order (the builder puts larger boxes first). */
+ * pushes the others. Closest hit: near first. The kernels of one octant
+ * (OCT 0..7) serve rays that keep their octant from one ray to the next,
+ * camera rays above all, whose neighbours meet the same children in the
+ * same order: there the insertion sort's branches predict and a level's
+ * sorting network (SC_ORDER_CHILDREN) is only extra work (camera rays 10 %
+ * faster without it on six meshes, docs/compare.md, twenty-seventh
+ * session). Both give the same order, so the choice changes no answer.
+ * Any hit ends the search, so order buys nothing (as in Embree's occlusion
+ * traversal): the first in slot order is visited and the rest pushed from
+ * the last slot down, so they pop in slot order (the builder puts larger
+ * boxes first). */
 SC_TRAVERSE_INLINE uint64_t push_children(const sc_bvh_node8 *node, unsigned m, const float *dist,
-                                          sc_stack_entry *stack, int *sp, const int ANY)
+                                          sc_stack_entry *stack, int *sp, const int ANY, const int OCT)
 {
+    if (!ANY && OCT >= 0 && OCT < SC_OCT_ANY)
+        return sc_order_children(node, m, dist, stack, sp);
     if (!ANY)
         return SC_ORDER_CHILDREN(node, m, dist, stack, sp);
     const uint64_t first = node->child[__builtin_ctz(m)];
@@ -240,7 +249,7 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
             if (prefetch)
                 for (unsigned h = m; h; h &= h - 1)
                     sc_prefetch_ref(bvh, node->child[__builtin_ctz(h)]);
-            ref = push_children(node, m, dist, stack, &sp, ANY);
+            ref = push_children(node, m, dist, stack, &sp, ANY, OCT);
         }
         if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST))
             return 1;
@@ -362,7 +371,7 @@ SC_TRAVERSE_INLINE int interleave_step(const sc_bvh *bvh, sc_interleave_slot *q,
         unsigned m = node_test(&q->ctx, node, q->ray.tmin, q->tmax, dist, SC_OCT_ANY, !ANY);
         if (m) {
             q->ref = (m & (m - 1)) == 0 ? node->child[__builtin_ctz(m)]
-                                        : push_children(node, m, dist, q->stack, &q->sp, ANY);
+                                        : push_children(node, m, dist, q->stack, &q->sp, ANY, SC_OCT_ANY);
             sc_prefetch_ref(bvh, q->ref);
             return 0;
         }

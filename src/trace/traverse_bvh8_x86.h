@@ -139,7 +139,8 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
 /* sc_order_children with three or more hit children as a sorting network
  * instead of an insertion sort, whose exits incoherent rays mispredict
  * (random rays 5-20 % faster; camera rays, whose order the insertion sort's
- * branches predict, up to 6 % slower: docs/compare.md, fifteenth session).
+ * branches predict, up to 6 % slower: docs/compare.md, fifteenth session;
+ * so the kernels of one octant keep the insertion sort: push_children).
  * The keys are 64 bits, the distance's bits above the slot, so the order is
  * sc_order_children's exactly (ties by slot; -0 as 0), and the traversal
  * visits leaves in the same order on every ISA level (the exact test's

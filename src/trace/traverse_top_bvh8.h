@@ -133,7 +133,7 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
                     for (unsigned m = mask & ~(1u << last); m; m &= m - 1)
                         stack[sp++].ref = node->child[__builtin_ctz(m)];
                 } else {
-                    ref = push_children(node, mask, dist, stack, &sp, 0);
+                    ref = push_children(node, mask, dist, stack, &sp, 0, SC_OCT_ANY);
                 }
                 continue;
             }
