@@ -356,21 +356,51 @@ typedef struct dvol {
     double vol[3], ev[3];    /* edge volumes D.(b x c), D.(c x a), D.(a x b) and bounds */
 } dvol;
 
+/* The vertices of edge e's volume: edge e is opposite vertex e. A table,
+ * not (e + 1) % 3, which compiled to two integer divisions an edge. */
+static const unsigned char dvol_p[3] = { 1, 2, 0 }, dvol_q[3] = { 2, 0, 1 };
+
+/* The formulas shared by the double filter and sc_exact_report (which must
+ * compute the same bits): the vertices relative to the origin, the edge
+ * volume D.(P x Q), and a vertex's tau = a.D / D.D. */
+static inline void dvol_rel(const sc_ray *r, const float *v, double a[3][3])
+{
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 3; k++)
+            a[j][k] = (double)v[3 * j + k] - (double)r->org[k];
+}
+static inline double dvol_edge(const double *d, const double *P, const double *Q)
+{
+    const double x0 = P[1] * Q[2] - P[2] * Q[1];
+    const double x1 = P[2] * Q[0] - P[0] * Q[2];
+    const double x2 = P[0] * Q[1] - P[1] * Q[0];
+    return (d[0] * x0 + d[1] * x1) + d[2] * x2;
+}
+static inline double dvol_dd(const double *d)
+{
+    return (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+}
+static inline double dvol_tau(const double *a, const double *d, double dd)
+{
+    return ((a[0] * d[0] + a[1] * d[1]) + a[2] * d[2]) / dd;
+}
+/* t = sum vol_j tau_j / sum vol_j; *den: the sum */
+static inline double dvol_t(const double *vol, const double *tau, double *den)
+{
+    *den = (vol[0] + vol[1]) + vol[2];
+    return ((vol[0] * tau[0] + vol[1] * tau[1]) + vol[2] * tau[2]) / *den;
+}
+
 /* Each volume term d_i p_j q_k passes through at most 7 roundings (two
  * translations, product, difference, product, two sums): the error is below
  * 7.001u times the permanent, computed within 7u itself, so 8u covers. */
 static void dvols(const sc_ray *r, const float *v, dvol *o)
 {
     const double d[3] = { r->dir[0], r->dir[1], r->dir[2] };
-    for (int j = 0; j < 3; j++)
-        for (int k = 0; k < 3; k++)
-            o->a[j][k] = (double)v[3 * j + k] - (double)r->org[k];
+    dvol_rel(r, v, o->a);
     for (int e = 0; e < 3; e++) {
-        const double *P = o->a[(e + 1) % 3], *Q = o->a[(e + 2) % 3];
-        double x0 = P[1] * Q[2] - P[2] * Q[1];
-        double x1 = P[2] * Q[0] - P[0] * Q[2];
-        double x2 = P[0] * Q[1] - P[1] * Q[0];
-        o->vol[e] = (d[0] * x0 + d[1] * x1) + d[2] * x2;
+        const double *P = o->a[dvol_p[e]], *Q = o->a[dvol_q[e]];
+        o->vol[e] = dvol_edge(d, P, Q);
         double p0 = fabs(P[1] * Q[2]) + fabs(P[2] * Q[1]);
         double p1 = fabs(P[2] * Q[0]) + fabs(P[0] * Q[2]);
         double p2 = fabs(P[0] * Q[1]) + fabs(P[1] * Q[0]);
@@ -389,11 +419,11 @@ static void dvols(const sc_ray *r, const float *v, dvol *o)
 static int dt_bounds(const sc_ray *r, const dvol *o, double *lo, double *hi, double *tc, double *u, double *v)
 {
     const double d[3] = { r->dir[0], r->dir[1], r->dir[2] };
-    double dd = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+    const double dd = dvol_dd(d);
     double tau[3], T = 0, eta = 0, tlo = INFINITY, thi = -INFINITY;
     for (int j = 0; j < 3; j++) {
         const double *a = o->a[j];
-        tau[j] = ((a[0] * d[0] + a[1] * d[1]) + a[2] * d[2]) / dd;
+        tau[j] = dvol_tau(a, d, dd);
         double m = (fabs(a[0] * d[0]) + fabs(a[1] * d[1])) + fabs(a[2] * d[2]);
         double ej = 0x1p-50 * m / dd;
         if (fabs(tau[j]) > T) T = fabs(tau[j]);
@@ -402,10 +432,10 @@ static int dt_bounds(const sc_ray *r, const dvol *o, double *lo, double *hi, dou
         if (tau[j] > thi) thi = tau[j];
     }
     double R = 0.5 * (thi - tlo);
-    double N = (o->vol[0] * tau[0] + o->vol[1] * tau[1]) + o->vol[2] * tau[2];
-    double den = (o->vol[0] + o->vol[1]) + o->vol[2];
+    double den;
+    const double t = dvol_t(o->vol, tau, &den);
     double E = (o->ev[0] + o->ev[1]) + o->ev[2];
-    double t = N / den, rho = E / fabs(den);
+    double rho = E / fabs(den);
     double te = (2 * rho * (R + eta) + eta * (1 + 2 * rho) + 0x1p-50 * T * (1 + 2 * rho) + 0x1p-52 * fabs(t)) *
                 (1 + 0x1p-30);
     if (!(den != 0 && isfinite(t) && isfinite(te)))
@@ -592,18 +622,9 @@ unsigned sc_exact_resolve(const sc_ray *r, const float *rows, unsigned W, unsign
     return nh;
 }
 
-/* dvols' edge volume D.(P x Q), written out for each edge: a loop over
- * edges indexed (e + 1) % 3 compiled to two integer divisions an edge */
-static inline double report_vol(const double *d, const double *P, const double *Q)
-{
-    const double x0 = P[1] * Q[2] - P[2] * Q[1];
-    const double x1 = P[2] * Q[0] - P[0] * Q[2];
-    const double x2 = P[0] * Q[1] - P[1] * Q[0];
-    return (d[0] * x0 + d[1] * x1) + d[2] * x2;
-}
-
 /* The decisions are made: only the reported values are recomputed, with
- * dvols' and dt_bounds' formulas for vol, tau and t (the same bits) but
+ * dvols' and dt_bounds' formulas for vol, tau and t (the same helpers, so
+ * the same bits) but
  * without their error bounds (two thirds of the work: random rays that hit
  * large triangles near their origin call this for one hit in six). The
  * certified [lo, hi] holds the exact t, so the double t is clamped to it:
@@ -615,17 +636,15 @@ void sc_exact_report(const sc_ray *r, sc_exact_hit *best)
     load_tri(best->rows, best->W, best->lane, tri);
     const double d[3] = { r->dir[0], r->dir[1], r->dir[2] };
     double a[3][3];
-    for (int j = 0; j < 3; j++)
-        for (int k = 0; k < 3; k++)
-            a[j][k] = (double)tri[3 * j + k] - (double)r->org[k];
-    const double dd = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
-    const double vol[3] = { report_vol(d, a[1], a[2]), report_vol(d, a[2], a[0]), report_vol(d, a[0], a[1]) };
-    double tau[3];
-    for (int e = 0; e < 3; e++)
-        tau[e] = ((a[e][0] * d[0] + a[e][1] * d[1]) + a[e][2] * d[2]) / dd;
-    const double N = (vol[0] * tau[0] + vol[1] * tau[1]) + vol[2] * tau[2];
-    const double den = (vol[0] + vol[1]) + vol[2];
-    const double t = N / den;
+    dvol_rel(r, tri, a);
+    const double dd = dvol_dd(d);
+    double vol[3], tau[3];
+    for (int e = 0; e < 3; e++) {
+        vol[e] = dvol_edge(d, a[dvol_p[e]], a[dvol_q[e]]);
+        tau[e] = dvol_tau(a[e], d, dd);
+    }
+    double den;
+    const double t = dvol_t(vol, tau, &den);
     if (!(den != 0 && isfinite(t)))
         return;
     float tf = (float)t;
