@@ -191,14 +191,44 @@ SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, c
 }
 #define SC_ORDER_CHILDREN order_children
 #endif
-/* the top level's packet rows (traverse_top_packet.h) in the ISA's vectors */
-#if SC_X86_AVX512
-#define SC_TOP_VP f32x16
-#else
+/* The top level's packet rows (traverse_top_packet.h) in ymm registers on
+ * both levels. On AVX-512 the same code in zmm registers (f32x16, and the
+ * transforms in __m512d) cut the instructions of 16-ray packets through
+ * 1,000 instances as much, but its bounce-ray packets ran 6 % slower: they
+ * leave the packet at the root for single rays, so only the set-up ran in
+ * zmm, and with it the whole run was slower on the Xeon measured (a lower
+ * clock for 512-bit arithmetic is the likely cause; that VM has no counters
+ * to show it). docs/scenes.md, twenty-eighth session. */
 #define SC_TOP_VP f32x8
-#endif
+
+/* The object rays of a top-level packet's 16 lanes: sc_top_object_ray's
+ * operations (in double, in the same order, rounded once to float) four
+ * lanes at a time, so every lane has the single-ray walk's bits. out: rows
+ * ox oy oz, -, dx dy dz (row 3 is not written). */
+SC_X86_INLINE void top_xfm16(const double *inv, const float o[3][16], const float d[3][16], float out[8][16])
+{
+    for (int h = 0; h < 16; h += 4) {
+#define LD(p) _mm256_cvtps_pd(_mm_load_ps(p))
+        const __m256d ox = LD(o[0] + h), oy = LD(o[1] + h), oz = LD(o[2] + h);
+        const __m256d dx = LD(d[0] + h), dy = LD(d[1] + h), dz = LD(d[2] + h);
+#undef LD
+        for (int i = 0; i < 3; i++) {
+            const double *row = inv + 4 * i;
+            const __m256d r0 = _mm256_set1_pd(row[0]), r1 = _mm256_set1_pd(row[1]), r2 = _mm256_set1_pd(row[2]);
+            /* row[0] x + row[1] y + row[2] z (+ row[3]), left to right */
+            __m256d p = _mm256_add_pd(_mm256_mul_pd(r0, ox), _mm256_mul_pd(r1, oy));
+            p = _mm256_add_pd(_mm256_add_pd(p, _mm256_mul_pd(r2, oz)), _mm256_set1_pd(row[3]));
+            __m256d q = _mm256_add_pd(_mm256_mul_pd(r0, dx), _mm256_mul_pd(r1, dy));
+            q = _mm256_add_pd(q, _mm256_mul_pd(r2, dz));
+            _mm_store_ps(out[i] + h, _mm256_cvtpd_ps(p));
+            _mm_store_ps(out[4 + i] + h, _mm256_cvtpd_ps(q));
+        }
+    }
+}
+#define SC_TOP_XFM16 top_xfm16
 #include "traverse_bvh8_single.h"
 #undef SC_TOP_VP
+#undef SC_TOP_XFM16
 
 /* Packets of 8 rays in ymm registers, and on AVX-512 of 16 in zmm. */
 #define VP f32x8

@@ -34,6 +34,12 @@
 
 #include "trace_packet.h"
 
+#ifdef SC_TOP_VP
+#define TCAT_(a, b) a##_##b
+#define TCAT(a, b) TCAT_(a, b)
+#define TV(op) TCAT(SC_TOP_VP, op)
+#endif
+
 #define SC_TOP_PACKET_SPREAD 0.1f
 
 typedef struct top_pk {
@@ -68,14 +74,14 @@ typedef struct top_pk_entry {
 } top_pk_entry;
 
 /* Whether the packet is narrow next to a box of centre c and half diagonal h. */
-SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
+SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h, float spread)
 {
     float D = 0;
     for (int k = 0; k < 3; k++) {
         const float dk = fabsf(c[k] - P->o0[k]);
         D = dk > D ? dk : D;
     }
-    return P->ospread + P->dspread * D <= SC_TOP_PACKET_SPREAD * h;
+    return P->ospread + P->dspread * D <= spread * h;
 }
 
 /* A hit h of item it for lane l: kept if it beats the lane's best. */
@@ -98,10 +104,67 @@ SC_TRAVERSE_INLINE void top_pk_occluded(top_pk *P, unsigned l)
     P->active &= ~(1u << l);
 }
 
-/* The lanes L that reached item `item`: each lane's object ray
- * (sc_top_object_ray, as the single-ray walk makes it), traced at once
- * through the single-ray kernel where the packet is wide next to the item,
- * else gathered into one packet of object rays. */
+/* The object rays of lanes L against item it (rows ox oy oz tmin dx dy dz
+ * tmax of 16 lanes; every lane is computed, those outside L are not read):
+ * each lane's sc_top_object_ray, as the single-ray walk makes it, ending
+ * where sc_top_item_tmax says (tcull is sc_top_tmax of the lane's best hit;
+ * an any-hit packet keeps tcull = tmax). Returns the lanes of L whose object
+ * ray is valid. */
+SC_TRAVERSE_INLINE uint32_t top_pk_objects(const top_pk *P, const sc_top_item *it, const sc_bvh *b, uint32_t L,
+                                           float ob[8][16])
+{
+    const float *tmax = b->cfg.tri_test == SC_TRI_EXACT ? P->tmax : P->tcull;
+#if defined(SC_TOP_XFM16) && defined(SC_TOP_VP)
+    enum { VW = TV(N) };
+    for (unsigned h = 0; h < 16; h += VW) {
+        TV(store)(ob[3] + h, TV(load)(P->tmin + h));
+        TV(store)(ob[7] + h, TV(load)(tmax + h));
+        if (!it->inv)
+            for (int k = 0; k < 3; k++)
+                TV(store)(ob[k] + h, TV(load)(P->o[k] + h)), TV(store)(ob[4 + k] + h, TV(load)(P->d[k] + h));
+    }
+    if (!it->inv)
+        return L;
+    SC_TOP_XFM16(it->inv, P->o, P->d, ob);
+    uint32_t sure = 0;
+    for (unsigned h = 0; h < 16; h += VW) {
+        const TV(t) om = TV(load)(P->om + h), dm = TV(load)(P->dm + h);
+        const TV(m) s = TV(and)(TV(and)(TV(le)(om, TV(set1)(it->vo)), TV(le)(dm, TV(set1)(it->vdhi))),
+                                TV(ge)(dm, TV(set1)(it->vdlo)));
+        sure |= TV(bits)(s) << h;
+    }
+#else
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray w = top_pk_ray(P, l, tmax[l]);
+        sc_ray r = w;
+        if (it->inv)
+            sc_top_object_ray(it->inv, &w, &r);
+        for (int k = 0; k < 3; k++)
+            ob[k][l] = r.org[k], ob[4 + k][l] = r.dir[k];
+        ob[3][l] = r.tmin, ob[7][l] = r.tmax;
+    }
+    if (!it->inv)
+        return L;
+    uint32_t sure = 0;
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        sure |= (uint32_t)sc_top_surely_valid(it, P->om[l], P->dm[l]) << l;
+    }
+#endif
+    uint32_t ok = L;
+    for (uint32_t e = L & ~sure; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray r = { { ob[0][l], ob[1][l], ob[2][l] }, ob[3][l], { ob[4][l], ob[5][l], ob[6][l] }, ob[7][l] };
+        if (!sc_ray_valid(&r))
+            ok &= ~(1u << l);
+    }
+    return ok;
+}
+
+/* The lanes L that reached item `item`: their object rays
+ * (top_pk_objects), traced one by one through the single-ray kernel where
+ * the packet is wide next to the item, else as one packet of object rays. */
 SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
 {
     const sc_top_item *it = &P->T->items[item];
@@ -110,68 +173,108 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
         return;
     const unsigned W = P->W;
     sc_trace_stats s;
-    memset(&s, 0, sizeof s);
+    if (P->st)
+        memset(&s, 0, sizeof s);
     sc_trace_stats *sp = P->st ? &s : NULL;
-    const int narrow = top_pk_narrow(P, it->center, it->half);
-    const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
-    /* narrow: W-lane rows for the packet kernels */
-    float pk[8 * 16] __attribute__((aligned(64)));
-    uint32_t ok = 0;
-    for (uint32_t e = L; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        const sc_ray w = top_pk_ray(P, l, P->any ? P->tmax[l] : sc_top_item_tmax(b, &P->best[l], P->tmax[l]));
-        sc_ray r = w;
-        if (it->inv) {
-            sc_top_object_ray(it->inv, &w, &r);
-            if (!sc_top_surely_valid(it, P->om[l], P->dm[l]) && !sc_ray_valid(&r))
-                continue;
-        }
-        if (narrow) {
-            pk[l] = r.org[0], pk[W + l] = r.org[1], pk[2 * W + l] = r.org[2], pk[3 * W + l] = r.tmin;
-            pk[4 * W + l] = r.dir[0], pk[5 * W + l] = r.dir[1], pk[6 * W + l] = r.dir[2], pk[7 * W + l] = r.tmax;
-            ok |= 1u << l;
-        } else if (P->any) {
-            if (sp ? k->any_stats(b, &r, sp) : k->any(b, &r))
-                top_pk_occluded(P, l);
-        } else {
-            sc_hitrec h;
-            if (sp)
-                k->closest_stats(b, &r, &h, sp);
-            else
-                k->closest(b, &r, &h);
-            top_pk_offer(P, it, b, l, &h);
-        }
-    }
-    if (ok) {
-        /* the kernels load whole rows: lanes not traced repeat a traced one */
-        const unsigned f = (unsigned)__builtin_ctz(ok);
-        for (unsigned l = 0; l < W; l++)
-            if (!(ok >> l & 1))
-                for (unsigned r = 0; r < 8; r++)
-                    pk[r * W + l] = pk[r * W + f];
-        if (P->any) {
-            int32_t occ[16];
-            sc_trace_packet_lanes(b, ok, pk, W, occ, 1, sp);
-            for (uint32_t e = ok; e; e &= e - 1) {
-                const unsigned l = (unsigned)__builtin_ctz(e);
-                if (occ[l])
+    float ob[8][16] __attribute__((aligned(64)));
+    const uint32_t ok = top_pk_objects(P, it, b, L, ob);
+    if (!ok)
+        goto done;
+    if (!top_pk_narrow(P, it->center, it->half, SC_TOP_PACKET_SPREAD)) {
+        const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
+        for (uint32_t e = ok; e; e &= e - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            const sc_ray r = { { ob[0][l], ob[1][l], ob[2][l] }, ob[3][l], { ob[4][l], ob[5][l], ob[6][l] }, ob[7][l] };
+            if (P->any) {
+                if (sp ? k->any_stats(b, &r, sp) : k->any(b, &r))
                     top_pk_occluded(P, l);
-            }
-        } else {
-            sc_hit_packet16 hp;
-            sc_trace_packet_lanes(b, ok, pk, W, &hp, 0, sp);
-            for (uint32_t e = ok; e; e &= e - 1) {
-                const unsigned l = (unsigned)__builtin_ctz(e);
+            } else {
                 sc_hitrec h;
-                sc_hit_lane_get(&hp, W, l, &h);
+                if (sp)
+                    k->closest_stats(b, &r, &h, sp);
+                else
+                    k->closest(b, &r, &h);
                 top_pk_offer(P, it, b, l, &h);
             }
         }
+        goto done;
     }
+    /* W-lane rows for the packet kernels, which load whole rows: lanes not
+     * traced repeat a traced one */
+    float pk[8 * 16] __attribute__((aligned(64)));
+    const unsigned f = (unsigned)__builtin_ctz(ok);
+#ifdef SC_TOP_VP
+    if (W >= TV(N)) {
+        for (unsigned r = 0; r < 8; r++)
+            for (unsigned h = 0; h < W; h += TV(N))
+                TV(store)(pk + r * W + h, TV(sel)(TV(mask_from_bits)(ok >> h), TV(load)(ob[r] + h), TV(set1)(ob[r][f])));
+    } else
+#endif
+    {
+        for (unsigned r = 0; r < 8; r++)
+            for (unsigned l = 0; l < W; l++)
+                pk[r * W + l] = ob[r][ok >> l & 1 ? l : f];
+    }
+    if (P->any) {
+        int32_t occ[16];
+        sc_trace_packet_lanes(b, ok, pk, W, occ, 1, sp);
+        for (uint32_t e = ok; e; e &= e - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            if (occ[l])
+                top_pk_occluded(P, l);
+        }
+    } else {
+        sc_hit_packet16 hp;
+        sc_trace_packet_lanes(b, ok, pk, W, &hp, 0, sp);
+        for (uint32_t e = ok; e; e &= e - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            sc_hitrec h;
+            sc_hit_lane_get(&hp, W, l, &h);
+            top_pk_offer(P, it, b, l, &h);
+        }
+    }
+done:
     if (P->st)
         sc_top_add_counters(P->st, &s);
 }
 
+#ifdef SC_TOP_VP
+/* The packet's first origin and its spreads (the extremes over the lanes
+ * of its origins, and of its directions scaled to unit L1 length). */
+SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
+{
+    enum { VW = TV(N) };
+    const unsigned f0 = (unsigned)__builtin_ctz(lanes);
+    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0), one = TV(set1)(1);
+    P->ospread = P->dspread = 0;
+    for (int k = 0; k < 3; k++) {
+        TV(t) ulo = pinf, uhi = pinf, olo = pinf, ohi = pinf;   /* uhi, ohi: negated */
+        for (unsigned h = 0; h < 16; h += VW) {
+            const TV(m) m = TV(mask_from_bits)(lanes >> h);
+            const TV(t) n = TV(add)(TV(add)(TV(abs)(TV(load)(P->d[0] + h)), TV(abs)(TV(load)(P->d[1] + h))),
+                                   TV(abs)(TV(load)(P->d[2] + h)));
+            const TV(t) u = TV(mul)(TV(load)(P->d[k] + h), TV(div)(one, n)), o = TV(load)(P->o[k] + h);
+            ulo = TV(min)(ulo, TV(sel)(m, u, pinf)), uhi = TV(min)(uhi, TV(sel)(m, TV(sub)(zero, u), pinf));
+            olo = TV(min)(olo, TV(sel)(m, o, pinf)), ohi = TV(min)(ohi, TV(sel)(m, TV(sub)(zero, o), pinf));
+        }
+        const float ds = -TV(hmin)(uhi) - TV(hmin)(ulo), os = -TV(hmin)(ohi) - TV(hmin)(olo);
+        P->ospread = os > P->ospread ? os : P->ospread;
+        P->dspread = ds > P->dspread ? ds : P->dspread;
+        P->o0[k] = P->o[k][f0];
+    }
+}
+
+/* The largest tcull of the active lanes: the frustum's far bound. */
+SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
+{
+    enum { VW = TV(N) };
+    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0);
+    TV(t) hi = pinf;   /* negated */
+    for (unsigned h = 0; h < 16; h += VW)
+        hi = TV(min)(hi, TV(sel)(TV(mask_from_bits)(P->active >> h), TV(sub)(zero, TV(load)(P->tcull + h)), pinf));
+    P->fr_tmax = -TV(hmin)(hi);
+}
+#else
 /* The packet's first origin and its spreads. */
 SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
 {
@@ -208,6 +311,8 @@ SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
     P->fr_tmax = hi;
 }
 
+#endif
+
 /* Whether every lane of `lanes` is in one octant (P->oct; from P->negm). */
 SC_TRAVERSE_INLINE int top_pk_octant(top_pk *P, uint32_t lanes)
 {
@@ -226,9 +331,6 @@ SC_TRAVERSE_INLINE int top_pk_octant(top_pk *P, uint32_t lanes)
 /* In the ISA's vectors (SC_TOP_VP: a simd_vec.h shape of 8 or 16 lanes)
  * and the frustum in one ymm register: the operations of the portable
  * forms below, in the same order, so the same bits. */
-#define TCAT_(a, b) a##_##b
-#define TCAT(a, b) TCAT_(a, b)
-#define TV(op) TCAT(SC_TOP_VP, op)
 
 /* sc_top_pre over the lanes (non-parallel rays), and the frustum. */
 SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
@@ -333,9 +435,6 @@ SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *no
     *near = dmin;
     return m;
 }
-#undef TV
-#undef TCAT
-#undef TCAT_
 #else
 SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
 {
@@ -409,6 +508,77 @@ SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *no
 }
 #endif
 
+/* The packet's rows into P (lanes not traced repeat the first traced one),
+ * tcull = tmax, each lane's sc_top_ray_extent; *single: the traced lanes
+ * parallel to an axis (sc_ray_parallel), *octs: bit ray_octant + 2 for
+ * each octant among the traced lanes. */
+SC_TRAVERSE_INLINE void top_pk_load(top_pk *P, uint32_t lanes, const float *rows, uint32_t *single, uint32_t *octs)
+{
+    const unsigned W = P->W, f0 = (unsigned)__builtin_ctz(lanes);
+#ifdef SC_TOP_VP
+    enum { VW = TV(N) };
+    if (W >= VW) {
+        uint32_t ok = ~0u, neg[3] = { 0, 0, 0 };
+        for (unsigned h = 0; h < 16; h += VW) {
+            const TV(m) m = TV(mask_from_bits)(h < W ? lanes >> h : 0);
+            TV(t) om = TV(set1)(0), dm = om, ad[3];
+            for (int k = 0; k < 8; k++) {
+                const float *row = rows + k * W;
+                const TV(t) f = TV(set1)(row[f0]);
+                const TV(t) v = h < W ? TV(sel)(m, TV(load)(row + h), f) : f;
+                float *dst = k < 3 ? P->o[k] : k == 3 ? P->tmin : k < 7 ? P->d[k - 4] : P->tmax;
+                TV(store)(dst + h, v);
+                if (k == 7)
+                    TV(store)(P->tcull + h, v);
+                else if (k < 3)
+                    om = TV(max)(om, TV(abs)(v));
+                else if (k > 3) {
+                    ad[k - 4] = TV(abs)(v);
+                    dm = TV(max)(dm, ad[k - 4]);
+                    neg[k - 4] |= TV(bits)(TV(lt)(v, TV(set1)(0))) << h;
+                }
+            }
+            TV(store)(P->om + h, om), TV(store)(P->dm + h, dm);
+            /* sc_ray_parallel: not every |d_k| >= SC_MIN_RCP_INPUT (NaN fails) */
+            const TV(t) tiny = TV(set1)(SC_MIN_RCP_INPUT);
+            const TV(m) np = TV(and)(TV(and)(TV(ge)(ad[0], tiny), TV(ge)(ad[1], tiny)), TV(ge)(ad[2], tiny));
+            ok &= ~(((1u << VW) - 1) << h) | (TV(bits)(np) << h);
+        }
+        const uint32_t np = lanes & ok;
+        *single = lanes & ~ok;
+        /* the octants among the lanes: one per sign pattern present */
+        uint32_t o = *single ? 1u : 0u;   /* -2 + 2: parallel */
+        for (uint32_t e = np; e;) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            const unsigned oc = (neg[0] >> l & 1) | (neg[1] >> l & 1) << 1 | (neg[2] >> l & 1) << 2;
+            o |= 1u << (oc + 2);
+            /* drop every lane of that octant */
+            uint32_t same = e;
+            for (int k = 0; k < 3; k++)
+                same &= oc >> k & 1 ? neg[k] : ~neg[k];
+            e &= ~same;
+        }
+        *octs = o;
+        return;
+    }
+#endif
+    for (int l = 0; l < 16; l++) {
+        const unsigned src = (unsigned)l < W && (lanes >> l & 1) ? (unsigned)l : f0;
+        for (int k = 0; k < 3; k++)
+            P->o[k][l] = rows[k * W + src], P->d[k][l] = rows[(4 + k) * W + src];
+        P->tmin[l] = rows[3 * W + src], P->tmax[l] = rows[7 * W + src];
+        P->tcull[l] = P->tmax[l];
+    }
+    *single = *octs = 0;
+    for (uint32_t e = lanes; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray r = top_pk_ray(P, l, P->tmax[l]);
+        *single |= (uint32_t)sc_ray_parallel(&r) << l;
+        *octs |= 1u << (ray_octant(&r) + 2);   /* -2 (parallel) .. 7 */
+        sc_top_ray_extent(&r, &P->om[l], &P->dm[l]);
+    }
+}
+
 /* Lanes `lanes` (checked rays) of a W-lane packet (rows as
  * sc_trace_packet_lanes) through the top level; out as there (closest: the
  * traced lanes' hits, misses included, written at the end). Statistics: the packet's top nodes and the
@@ -423,32 +593,19 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     P.occluded = any ? out : NULL;
     /* every lane of the rows, traced or not, so that the loops below run
      * over all 16; the lanes not traced repeat the first traced one */
-    const unsigned f0 = (unsigned)__builtin_ctz(lanes);
-    for (int l = 0; l < 16; l++) {
-        const unsigned src = (unsigned)l < W && (lanes >> l & 1) ? (unsigned)l : f0;
-        for (int k = 0; k < 3; k++)
-            P.o[k][l] = rows[k * W + src], P.d[k][l] = rows[(4 + k) * W + src];
-        P.tmin[l] = rows[3 * W + src], P.tmax[l] = rows[7 * W + src];
-        P.tcull[l] = P.tmax[l];
-    }
-    /* lanes parallel to an axis, and every lane of a packet wide against
-     * the whole scene: one by one through the single-ray top level */
-    uint32_t single = 0, octs = 0;
+    uint32_t single, octs;
+    top_pk_load(&P, lanes, rows, &single, &octs);
     for (uint32_t e = lanes; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         if (any)
             P.occluded[l] = 0;
         else
             sc_top_miss(P.tmax[l], &P.best[l]);
-        const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
-        single |= (uint32_t)sc_ray_parallel(&r) << l;
-        octs |= 1u << (ray_octant(&r) + 2);   /* -2 (parallel) .. 7 */
-        sc_top_ray_extent(&r, &P.om[l], &P.dm[l]);
     }
     uint32_t pl = lanes & ~single;
     if (pl) {
         top_pk_spread(&P, pl);
-        if (!top_pk_narrow(&P, T->center, T->half))
+        if (!top_pk_narrow(&P, T->center, T->half, SC_TOP_PACKET_SPREAD))
             single = lanes, pl = 0;
     }
     /* a packet whose lanes span octants (bounce rays): the object rays of
@@ -530,3 +687,9 @@ done:
             sc_hit_lane_put(out, W, l, &P.best[l]);
         }
 }
+
+#ifdef SC_TOP_VP
+#undef TV
+#undef TCAT
+#undef TCAT_
+#endif
