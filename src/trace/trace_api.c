@@ -112,6 +112,15 @@ void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows,
                 sc_hit_packet8 h8 __attribute__((aligned(32)));
                 sc_hit_packet16 *h16 = out;
                 k->closest_p8(bvh, &r8, hl, &h8, stats);
+                if (hl == 0xff) {
+                    /* a full half (camera rays): its nine rows whole, not
+                     * 72 fields one by one */
+                    const float *src = (const float *)(const void *)&h8;   /* as sc_hit_lane_get reads it */
+                    float *dst = (float *)(void *)h16;
+                    for (unsigned f = 0; f < 9; f++)
+                        memcpy(dst + 16 * f + 8 * h, src + 8 * f, 8 * sizeof(float));
+                    continue;
+                }
                 for (uint32_t e = hl; e; e &= e - 1) {
                     const unsigned i = (unsigned)__builtin_ctz(e);
                     sc_hitrec one;
