@@ -9,11 +9,13 @@
  * t, then inst, geom, prim, whatever order the instances are reached in).
  *
  * The box tests are the single ray's FMA test (sc_top_pre's constants, the
- * growth folded into the padding) over the lanes in the ISA's vectors; a
+ * growth folded into the padding) over the lanes in vectors (SC_TOP_VP,
+ * 8 lanes wide on both x86 levels: traverse_bvh8_x86.h says why); a
  * packet whose lanes share an octant first tests the node's 8 children
  * against its frustum in one 8-wide test, and only the children that pass
  * lane by lane (as the BVHs' own packets do, traverse_bvh8_packet.h). The
- * object rays are made only for the lanes that reach an instance. Lanes
+ * object rays of an instance are made for all lanes at once (SC_TOP_XFM16,
+ * in double) and used for the lanes that reach it. Lanes
  * parallel to an axis take the single-ray top kernel.
  *
  * A packet pays where its rays stay together through a tree, that is where
@@ -74,14 +76,14 @@ typedef struct top_pk_entry {
 } top_pk_entry;
 
 /* Whether the packet is narrow next to a box of centre c and half diagonal h. */
-SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h, float spread)
+SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
 {
     float D = 0;
     for (int k = 0; k < 3; k++) {
         const float dk = fabsf(c[k] - P->o0[k]);
         D = dk > D ? dk : D;
     }
-    return P->ospread + P->dspread * D <= spread * h;
+    return P->ospread + P->dspread * D <= SC_TOP_PACKET_SPREAD * h;
 }
 
 /* A hit h of item it for lane l: kept if it beats the lane's best. */
@@ -180,7 +182,7 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     const uint32_t ok = top_pk_objects(P, it, b, L, ob);
     if (!ok)
         goto done;
-    if (!top_pk_narrow(P, it->center, it->half, SC_TOP_PACKET_SPREAD)) {
+    if (!top_pk_narrow(P, it->center, it->half)) {
         const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
         for (uint32_t e = ok; e; e &= e - 1) {
             const unsigned l = (unsigned)__builtin_ctz(e);
@@ -605,7 +607,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     uint32_t pl = lanes & ~single;
     if (pl) {
         top_pk_spread(&P, pl);
-        if (!top_pk_narrow(&P, T->center, T->half, SC_TOP_PACKET_SPREAD))
+        if (!top_pk_narrow(&P, T->center, T->half))
             single = lanes, pl = 0;
     }
     /* a packet whose lanes span octants (bounce rays): the object rays of
