@@ -145,8 +145,8 @@ SC_TRAVERSE_INLINE int leaf_visit(const sc_bvh *bvh, const trace_ctx *ctx, const
  * (OCT 0..7) serve rays that keep their octant from one ray to the next,
  * camera rays above all, whose neighbours meet the same children in the
  * same order: there the insertion sort's branches predict and a level's
- * sorting network (SC_ORDER_CHILDREN) is only extra work (camera rays 10 %
- * faster without it on six meshes, docs/compare.md, twenty-seventh
+ * sorting network (SC_ORDER_CHILDREN) is only extra work (camera rays 8 %
+ * faster without it, median of ten meshes, docs/compare.md, twenty-seventh
  * session). Both give the same order, so the choice changes no answer.
  * Any hit ends the search, so order buys nothing (as in Embree's occlusion
  * traversal): the first in slot order is visited and the rest pushed from

@@ -240,26 +240,80 @@ done:
         sc_top_add_counters(P->st, &s);
 }
 
+/* The smallest and largest value of a 16-lane row over lanes L (+inf and
+ * -inf for none), and each lane's direction scaled to unit L1 length. */
 #ifdef SC_TOP_VP
-/* The packet's first origin and its spreads (the extremes over the lanes
- * of its origins, and of its directions scaled to unit L1 length). */
+SC_TRAVERSE_INLINE float top_pk_row_min(const float *row, uint32_t L)
+{
+    const TV(t) pinf = TV(set1)(INFINITY);
+    TV(t) lo = pinf;
+    for (unsigned h = 0; h < 16; h += TV(N))
+        lo = TV(min)(lo, TV(sel)(TV(mask_from_bits)(L >> h), TV(load)(row + h), pinf));
+    return TV(hmin)(lo);
+}
+
+SC_TRAVERSE_INLINE float top_pk_row_max(const float *row, uint32_t L)
+{
+    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0);
+    TV(t) lo = pinf;   /* of the negated values */
+    for (unsigned h = 0; h < 16; h += TV(N))
+        lo = TV(min)(lo, TV(sel)(TV(mask_from_bits)(L >> h), TV(sub)(zero, TV(load)(row + h)), pinf));
+    return -TV(hmin)(lo);
+}
+
+SC_TRAVERSE_INLINE void top_pk_unit_dirs(const top_pk *P, float u[3][16])
+{
+    for (unsigned h = 0; h < 16; h += TV(N)) {
+        const TV(t) n = TV(add)(TV(add)(TV(abs)(TV(load)(P->d[0] + h)), TV(abs)(TV(load)(P->d[1] + h))),
+                               TV(abs)(TV(load)(P->d[2] + h)));
+        const TV(t) inv = TV(div)(TV(set1)(1.0f), n);
+        for (int k = 0; k < 3; k++)
+            TV(store)(u[k] + h, TV(mul)(TV(load)(P->d[k] + h), inv));
+    }
+}
+#else
+/* compares, not fminf/fmaxf: those are calls at the baseline level */
+SC_TRAVERSE_INLINE float top_pk_row_min(const float *row, uint32_t L)
+{
+    float lo = INFINITY;
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        lo = row[l] < lo ? row[l] : lo;
+    }
+    return lo;
+}
+
+SC_TRAVERSE_INLINE float top_pk_row_max(const float *row, uint32_t L)
+{
+    float hi = -INFINITY;
+    for (uint32_t e = L; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        hi = row[l] > hi ? row[l] : hi;
+    }
+    return hi;
+}
+
+SC_TRAVERSE_INLINE void top_pk_unit_dirs(const top_pk *P, float u[3][16])
+{
+    for (unsigned l = 0; l < 16; l++) {
+        const float inv = 1 / (fabsf(P->d[0][l]) + fabsf(P->d[1][l]) + fabsf(P->d[2][l]));
+        for (int k = 0; k < 3; k++)
+            u[k][l] = P->d[k][l] * inv;
+    }
+}
+#endif
+
+/* The packet's first origin and its spreads: the extents over the lanes of
+ * its origins and of its unit-L1 directions, the larger axis of each. */
 SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
 {
-    enum { VW = TV(N) };
+    float u[3][16] __attribute__((aligned(64)));
+    top_pk_unit_dirs(P, u);
     const unsigned f0 = (unsigned)__builtin_ctz(lanes);
-    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0), one = TV(set1)(1);
     P->ospread = P->dspread = 0;
     for (int k = 0; k < 3; k++) {
-        TV(t) ulo = pinf, uhi = pinf, olo = pinf, ohi = pinf;   /* uhi, ohi: negated */
-        for (unsigned h = 0; h < 16; h += VW) {
-            const TV(m) m = TV(mask_from_bits)(lanes >> h);
-            const TV(t) n = TV(add)(TV(add)(TV(abs)(TV(load)(P->d[0] + h)), TV(abs)(TV(load)(P->d[1] + h))),
-                                   TV(abs)(TV(load)(P->d[2] + h)));
-            const TV(t) u = TV(mul)(TV(load)(P->d[k] + h), TV(div)(one, n)), o = TV(load)(P->o[k] + h);
-            ulo = TV(min)(ulo, TV(sel)(m, u, pinf)), uhi = TV(min)(uhi, TV(sel)(m, TV(sub)(zero, u), pinf));
-            olo = TV(min)(olo, TV(sel)(m, o, pinf)), ohi = TV(min)(ohi, TV(sel)(m, TV(sub)(zero, o), pinf));
-        }
-        const float ds = -TV(hmin)(uhi) - TV(hmin)(ulo), os = -TV(hmin)(ohi) - TV(hmin)(olo);
+        const float os = top_pk_row_max(P->o[k], lanes) - top_pk_row_min(P->o[k], lanes);
+        const float ds = top_pk_row_max(u[k], lanes) - top_pk_row_min(u[k], lanes);
         P->ospread = os > P->ospread ? os : P->ospread;
         P->dspread = ds > P->dspread ? ds : P->dspread;
         P->o0[k] = P->o[k][f0];
@@ -269,51 +323,8 @@ SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
 /* The largest tcull of the active lanes: the frustum's far bound. */
 SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
 {
-    enum { VW = TV(N) };
-    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0);
-    TV(t) hi = pinf;   /* negated */
-    for (unsigned h = 0; h < 16; h += VW)
-        hi = TV(min)(hi, TV(sel)(TV(mask_from_bits)(P->active >> h), TV(sub)(zero, TV(load)(P->tcull + h)), pinf));
-    P->fr_tmax = -TV(hmin)(hi);
+    P->fr_tmax = top_pk_row_max(P->tcull, P->active);
 }
-#else
-/* The packet's first origin and its spreads. */
-SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
-{
-    float ulo[3], uhi[3], olo[3], ohi[3];
-    const unsigned f0 = (unsigned)__builtin_ctz(lanes);
-    for (int k = 0; k < 3; k++)
-        ulo[k] = olo[k] = INFINITY, uhi[k] = ohi[k] = -INFINITY, P->o0[k] = P->o[k][f0];
-    for (uint32_t e = lanes; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        const float inv = 1 / (fabsf(P->d[0][l]) + fabsf(P->d[1][l]) + fabsf(P->d[2][l]));
-        for (int k = 0; k < 3; k++) {
-            /* compares, not fminf/fmaxf: those are calls at the baseline level */
-            const float u = P->d[k][l] * inv, o = P->o[k][l];
-            ulo[k] = u < ulo[k] ? u : ulo[k], uhi[k] = u > uhi[k] ? u : uhi[k];
-            olo[k] = o < olo[k] ? o : olo[k], ohi[k] = o > ohi[k] ? o : ohi[k];
-        }
-    }
-    P->ospread = P->dspread = 0;
-    for (int k = 0; k < 3; k++) {
-        const float os = ohi[k] - olo[k], ds = uhi[k] - ulo[k];
-        P->ospread = os > P->ospread ? os : P->ospread;
-        P->dspread = ds > P->dspread ? ds : P->dspread;
-    }
-}
-
-/* The largest tcull of the active lanes: the frustum's far bound. */
-SC_TRAVERSE_INLINE void top_pk_far(top_pk *P)
-{
-    float hi = -INFINITY;
-    for (uint32_t e = P->active; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        hi = P->tcull[l] > hi ? P->tcull[l] : hi;
-    }
-    P->fr_tmax = hi;
-}
-
-#endif
 
 /* Whether every lane of `lanes` is in one octant (P->oct; from P->negm). */
 SC_TRAVERSE_INLINE int top_pk_octant(top_pk *P, uint32_t lanes)
@@ -511,57 +522,41 @@ SC_TRAVERSE_INLINE uint32_t top_pk_child(const top_pk *P, const sc_bvh_node8 *no
 #endif
 
 /* The packet's rows into P (lanes not traced repeat the first traced one),
- * tcull = tmax, each lane's sc_top_ray_extent; *single: the traced lanes
- * parallel to an axis (sc_ray_parallel), *octs: bit ray_octant + 2 for
- * each octant among the traced lanes. */
-SC_TRAVERSE_INLINE void top_pk_load(top_pk *P, uint32_t lanes, const float *rows, uint32_t *single, uint32_t *octs)
+ * tcull = tmax, each lane's sc_top_ray_extent. Returns the traced lanes
+ * parallel to an axis (sc_ray_parallel); *mixed: whether the traced lanes
+ * span more than one octant (ray_octant; the parallel ones count as one). */
+SC_TRAVERSE_INLINE uint32_t top_pk_load(top_pk *P, uint32_t lanes, const float *rows, int *mixed)
 {
     const unsigned W = P->W, f0 = (unsigned)__builtin_ctz(lanes);
 #ifdef SC_TOP_VP
     enum { VW = TV(N) };
     if (W >= VW) {
-        uint32_t ok = ~0u, neg[3] = { 0, 0, 0 };
+        float *const dst[8] = { P->o[0], P->o[1], P->o[2], P->tmin, P->d[0], P->d[1], P->d[2], P->tmax };
+        const TV(t) zero = TV(set1)(0), tiny = TV(set1)(SC_MIN_RCP_INPUT);
+        uint32_t par = 0, neg[3] = { 0, 0, 0 };
         for (unsigned h = 0; h < 16; h += VW) {
             const TV(m) m = TV(mask_from_bits)(h < W ? lanes >> h : 0);
-            TV(t) om = TV(set1)(0), dm = om, ad[3];
+            TV(t) v[8];
             for (int k = 0; k < 8; k++) {
-                const float *row = rows + k * W;
-                const TV(t) f = TV(set1)(row[f0]);
-                const TV(t) v = h < W ? TV(sel)(m, TV(load)(row + h), f) : f;
-                float *dst = k < 3 ? P->o[k] : k == 3 ? P->tmin : k < 7 ? P->d[k - 4] : P->tmax;
-                TV(store)(dst + h, v);
-                if (k == 7)
-                    TV(store)(P->tcull + h, v);
-                else if (k < 3)
-                    om = TV(max)(om, TV(abs)(v));
-                else if (k > 3) {
-                    ad[k - 4] = TV(abs)(v);
-                    dm = TV(max)(dm, ad[k - 4]);
-                    neg[k - 4] |= TV(bits)(TV(lt)(v, TV(set1)(0))) << h;
-                }
+                const TV(t) f = TV(set1)(rows[k * W + f0]);
+                v[k] = h < W ? TV(sel)(m, TV(load)(rows + k * W + h), f) : f;
+                TV(store)(dst[k] + h, v[k]);
             }
-            TV(store)(P->om + h, om), TV(store)(P->dm + h, dm);
+            TV(store)(P->tcull + h, v[7]);
+            const TV(t) ad[3] = { TV(abs)(v[4]), TV(abs)(v[5]), TV(abs)(v[6]) };
+            TV(store)(P->om + h, TV(max)(TV(max)(TV(abs)(v[0]), TV(abs)(v[1])), TV(abs)(v[2])));
+            TV(store)(P->dm + h, TV(max)(TV(max)(ad[0], ad[1]), ad[2]));
             /* sc_ray_parallel: not every |d_k| >= SC_MIN_RCP_INPUT (NaN fails) */
-            const TV(t) tiny = TV(set1)(SC_MIN_RCP_INPUT);
             const TV(m) np = TV(and)(TV(and)(TV(ge)(ad[0], tiny), TV(ge)(ad[1], tiny)), TV(ge)(ad[2], tiny));
-            ok &= ~(((1u << VW) - 1) << h) | (TV(bits)(np) << h);
-        }
-        const uint32_t np = lanes & ok;
-        *single = lanes & ~ok;
-        /* the octants among the lanes: one per sign pattern present */
-        uint32_t o = *single ? 1u : 0u;   /* -2 + 2: parallel */
-        for (uint32_t e = np; e;) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            const unsigned oc = (neg[0] >> l & 1) | (neg[1] >> l & 1) << 1 | (neg[2] >> l & 1) << 2;
-            o |= 1u << (oc + 2);
-            /* drop every lane of that octant */
-            uint32_t same = e;
+            par |= (~TV(bits)(np) & ((1u << VW) - 1)) << h;
             for (int k = 0; k < 3; k++)
-                same &= oc >> k & 1 ? neg[k] : ~neg[k];
-            e &= ~same;
+                neg[k] |= TV(bits)(TV(lt)(v[4 + k], zero)) << h;
         }
-        *octs = o;
-        return;
+        const uint32_t single = lanes & par, np = lanes & ~par;
+        *mixed = single && np;
+        for (int k = 0; k < 3; k++)
+            *mixed |= (neg[k] & np) != 0 && (neg[k] & np) != np;
+        return single;
     }
 #endif
     for (int l = 0; l < 16; l++) {
@@ -571,14 +566,16 @@ SC_TRAVERSE_INLINE void top_pk_load(top_pk *P, uint32_t lanes, const float *rows
         P->tmin[l] = rows[3 * W + src], P->tmax[l] = rows[7 * W + src];
         P->tcull[l] = P->tmax[l];
     }
-    *single = *octs = 0;
+    uint32_t single = 0, octs = 0;
     for (uint32_t e = lanes; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray r = top_pk_ray(P, l, P->tmax[l]);
-        *single |= (uint32_t)sc_ray_parallel(&r) << l;
-        *octs |= 1u << (ray_octant(&r) + 2);   /* -2 (parallel) .. 7 */
+        single |= (uint32_t)sc_ray_parallel(&r) << l;
+        octs |= 1u << (ray_octant(&r) + 2);   /* -2 (parallel) .. 7 */
         sc_top_ray_extent(&r, &P->om[l], &P->dm[l]);
     }
+    *mixed = (octs & (octs - 1)) != 0;
+    return single;
 }
 
 /* Lanes `lanes` (checked rays) of a W-lane packet (rows as
@@ -595,8 +592,8 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     P.occluded = any ? out : NULL;
     /* every lane of the rows, traced or not, so that the loops below run
      * over all 16; the lanes not traced repeat the first traced one */
-    uint32_t single, octs;
-    top_pk_load(&P, lanes, rows, &single, &octs);
+    int inc;   /* lanes in several octants (bounce rays): see below */
+    uint32_t single = top_pk_load(&P, lanes, rows, &inc);
     for (uint32_t e = lanes; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         if (any)
@@ -613,7 +610,6 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     /* a packet whose lanes span octants (bounce rays): the object rays of
      * the lanes traced one by one take the one-body kernels, as an
      * incoherent run of single rays does (top_closest) */
-    const int inc = (octs & (octs - 1)) != 0;
     for (uint32_t e = single; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
