@@ -63,6 +63,23 @@ static inline int sc_ray_valid(const sc_ray *r)
     return ok & ((r->dir[0] != 0) | (r->dir[1] != 0) | (r->dir[2] != 0));
 }
 
+/* The valid lanes of a K-lane packet (K = 8 or 16; rows ox oy oz tmin dx
+ * dy dz tmax, K floats each) as a mask; -1 if a valid lane's ray is
+ * refused (sc_ray_valid). The specification of the levels' packet_valid
+ * kernels. */
+static inline int64_t sc_packet_valid_ref(const int32_t *valid, const float *rows, unsigned K)
+{
+    uint32_t lanes = 0, bad = 0;
+    for (unsigned i = 0; i < K; i++) {
+        const sc_ray r = { { rows[i], rows[K + i], rows[2 * K + i] }, rows[3 * K + i],
+                           { rows[4 * K + i], rows[5 * K + i], rows[6 * K + i] }, rows[7 * K + i] };
+        const uint32_t v = valid[i] != 0;
+        lanes |= v << i;
+        bad |= (v & (uint32_t)!sc_ray_valid(&r)) << i;
+    }
+    return bad ? (int64_t)-1 : (int64_t)lanes;
+}
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 /* sc_ray_valid on the ray's two halves in two registers (its own compares,

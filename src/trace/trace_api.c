@@ -39,44 +39,6 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
  * One body per width: the argument checks, then the level's packet kernel,
  * or lane by lane where it has none. */
 
-/* The valid lanes as a mask; -1 if a valid lane's ray is refused. The
- * conditions of sc_ray_valid four lanes at a time (SSE2, the x86-64
- * baseline): isfinite(d) as |d| <= FLT_MAX, which NaN fails. */
-static int64_t packet_valid_lanes(const int32_t *valid, const float *rows, unsigned K)
-{
-    const float *ox = rows, *oy = rows + K, *oz = rows + 2 * K, *tmin = rows + 3 * K, *dx = rows + 4 * K,
-                *dy = rows + 5 * K, *dz = rows + 6 * K, *tmax = rows + 7 * K;
-    uint32_t lanes = 0, bad = 0;
-#if defined(__SSE2__)
-    const __m128 sgn = _mm_set1_ps(-0.0f), omax = _mm_set1_ps(SC_MAX_ORIGIN), fmax = _mm_set1_ps(FLT_MAX),
-                 zero = _mm_setzero_ps();
-    for (unsigned i = 0; i < K; i += 4) {
-#define ABS(p) _mm_andnot_ps(sgn, _mm_loadu_ps((p) + i))
-        __m128 ok = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(ABS(ox), omax), _mm_cmplt_ps(ABS(oy), omax)),
-                               _mm_cmplt_ps(ABS(oz), omax));
-        ok = _mm_and_ps(ok, _mm_and_ps(_mm_and_ps(_mm_cmple_ps(ABS(dx), fmax), _mm_cmple_ps(ABS(dy), fmax)),
-                                       _mm_cmple_ps(ABS(dz), fmax)));
-        __m128 nz = _mm_or_ps(_mm_or_ps(_mm_cmpneq_ps(_mm_loadu_ps(dx + i), zero),
-                                        _mm_cmpneq_ps(_mm_loadu_ps(dy + i), zero)),
-                              _mm_cmpneq_ps(_mm_loadu_ps(dz + i), zero));
-        ok = _mm_and_ps(_mm_and_ps(ok, nz), _mm_cmpge_ps(_mm_loadu_ps(tmin + i), zero));
-        ok = _mm_and_ps(ok, _mm_cmpord_ps(_mm_loadu_ps(tmax + i), _mm_loadu_ps(tmax + i)));
-#undef ABS
-        __m128i v = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(const void *)(valid + i)), _mm_setzero_si128());
-        uint32_t vm = (uint32_t)_mm_movemask_ps(_mm_castsi128_ps(v)) ^ 15u;
-        lanes |= vm << i;
-        bad |= (vm & ~(uint32_t)_mm_movemask_ps(ok)) << i;
-    }
-#else
-    for (unsigned i = 0; i < K; i++) {
-        const sc_ray r = { { ox[i], oy[i], oz[i] }, tmin[i], { dx[i], dy[i], dz[i] }, tmax[i] };
-        const uint32_t v = valid[i] != 0;
-        lanes |= v << i;
-        bad |= (v & (uint32_t)!sc_ray_valid(&r)) << i;
-    }
-#endif
-    return bad ? (int64_t)-1 : (int64_t)lanes;
-}
 static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 1)) == 0; }
 
 /* One body for the four packet calls. rays: the packet's rows (ox oy oz
@@ -101,17 +63,22 @@ void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows,
             const uint32_t hl = (lanes >> (8 * h)) & 0xff;
             if (!hl)
                 continue;
+            /* a packet of 8 is already one (aligned as the caller checked) */
             sc_ray_packet8 r8 __attribute__((aligned(32)));
-            for (unsigned f = 0; f < 8; f++)
-                memcpy(r8.ox + 8 * f, rows + f * W + 8 * h, 8 * sizeof(float));
+            const sc_ray_packet8 *p8 = (const sc_ray_packet8 *)(const void *)rows;
+            if (W == 16) {
+                for (unsigned f = 0; f < 8; f++)
+                    memcpy(r8.ox + 8 * f, rows + f * W + 8 * h, 8 * sizeof(float));
+                p8 = &r8;
+            }
             if (any) {
-                k->any_p8(bvh, &r8, hl, (int32_t *)out + 8 * h, stats);
+                k->any_p8(bvh, p8, hl, (int32_t *)out + 8 * h, stats);
             } else if (W == 8) {
-                k->closest_p8(bvh, &r8, hl, out, stats);
+                k->closest_p8(bvh, p8, hl, out, stats);
             } else {
                 sc_hit_packet8 h8 __attribute__((aligned(32)));
                 sc_hit_packet16 *h16 = out;
-                k->closest_p8(bvh, &r8, hl, &h8, stats);
+                k->closest_p8(bvh, p8, hl, &h8, stats);
                 if (hl == 0xff) {
                     /* a full half (camera rays): its nine rows whole, not
                      * 72 fields one by one */
@@ -153,7 +120,7 @@ int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigne
     const uintptr_t align = W * 4;
     if (!valid || !rows || !out || !aligned_to(rows, align) || (!any && !aligned_to(out, align)))
         return -1;
-    return packet_valid_lanes(valid, rows, W);
+    return sc_kernels_active()->trace[0].packet_valid(valid, rows, W);
 }
 
 static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,

@@ -66,6 +66,10 @@ typedef struct sc_trace_kernels {
      * coherent (stream_gather.h), the same in every row. */
     int (*stream_gather16)(const char *rays, size_t ray_stride, const float *lo, const float *hi,
                            sc_ray_packet16 *packet);
+    /* The valid lanes of a W-lane packet (W = 8 or 16, rows as above) as
+     * a mask, or -1 if a valid lane's ray is refused: sc_packet_valid_ref,
+     * the same in every row. */
+    int64_t (*packet_valid)(const int32_t *valid, const float *rows, unsigned W);
 } sc_trace_kernels;
 
 /* [sc_tri_test]. The x86 tables exist only in x86 builds. */

@@ -45,6 +45,11 @@ static inline unsigned node_test_par(const trace_ctx *c, const sc_bvh_node8 *nod
     return sc_slab_par(&c->pre, node, tmin, tmax, dist);
 }
 
+static int64_t packet_valid(const int32_t *valid, const float *rows, unsigned K)
+{
+    return sc_packet_valid_ref(valid, rows, K);
+}
+
 static int stream_gather16(const char *rays, size_t ray_stride, const float *lo, const float *hi,
                            sc_ray_packet16 *p)
 {

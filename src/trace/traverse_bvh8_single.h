@@ -638,7 +638,7 @@ static SC_TARGET int any_stats_exact(const sc_bvh *b, const sc_ray *r, sc_trace_
 
 #define SC_TRACE_TOP                                                                                  \
     , .top_closest = top_closest, .top_any = top_any, .top_packet = top_packet,                       \
-    .stream_gather16 = stream_gather16
+    .stream_gather16 = stream_gather16, .packet_valid = packet_valid
 
 #define SC_TRACE_KERNEL_TABLE                                                                         \
     {                                                                                                 \
