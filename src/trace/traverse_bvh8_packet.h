@@ -68,12 +68,6 @@ typedef struct {
 } PFN(pk_ctx);
 #define pk_ctx PFN(pk_ctx)
 
-/* Pick lanes of a, b, c by the lane masks m1 (take b) and m2 (take c). */
-SC_X86_INLINE pvec PFN(pk_sel3)(uint32_t m1, uint32_t m2, pvec a, pvec b, pvec c)
-{
-    return PV(sel)(PV(mask_from_bits)(m2), c, PV(sel)(PV(mask_from_bits)(m1), b, a));
-}
-
 /* The cone around the packet (lanes: the traced lanes, origins equal): unit
  * directions n_i, axis a their normalised sum; sin_t >= every |a x n_i|
  * with 2^-18 to spare for the float rounding of n_i, a and the products
@@ -118,30 +112,52 @@ SC_X86_INLINE int PFN(pk_cone)(pk_ctx *c, pvec dx, pvec dy, pvec dz, uint32_t la
 /* Per-lane set-up of the traced lanes in vectors: sc_ray_precompute's
  * operations (and sc_shear_axes' choice) lane by lane, so every lane has
  * the single ray's bits. Returns the lanes that are parallel rays (some
- * |d_k| < SC_MIN_RCP_INPUT): the caller traces those singly. Untraced lanes
- * are loaded as a copy of a traced lane, so no vector operation sees
- * garbage. cone: try the cone (the BVH has spheres). */
+ * |d_k| < SC_MIN_RCP_INPUT): the caller traces those singly. Every other
+ * lane (not asked for, or parallel) is loaded as a copy of a traced lane,
+ * so no vector operation sees garbage, and reductions over all PK lanes
+ * (the frustum, the octant, whether the packet is uniform) are reductions
+ * over the traced lanes without a mask. cone: try the cone (the BVH has
+ * spheres). */
 SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, uint32_t lanes, int cone)
 {
-    const unsigned f = (unsigned)__builtin_ctz(lanes);
-    const PV(m) lm = PV(mask_from_bits)(lanes);
+    const uint32_t full = PK == 16 ? 0xffffu : 0xffu;
+    pvec o[3], d[3], tmin, tmax, ad[3];
+    const pvec tiny = PV(set1)(SC_MIN_RCP_INPUT), one = PV(set1)(1.0f), zero = PV(set1)(0);
+    uint32_t par = 0, tl = lanes;
+    for (int pass = 0; pass < 2; pass++) {
+        if (tl == full) {
+            o[0] = PV(load)(r->ox), o[1] = PV(load)(r->oy), o[2] = PV(load)(r->oz);
+            d[0] = PV(load)(r->dx), d[1] = PV(load)(r->dy), d[2] = PV(load)(r->dz);
+            tmin = PV(load)(r->tmin), tmax = PV(load)(r->tmax);
+        } else {
+            const unsigned f = (unsigned)__builtin_ctz(tl);
+            const PV(m) lm = PV(mask_from_bits)(tl);
 #define LD(row) PV(sel)(lm, PV(load)(r->row), PV(set1)(r->row[f]))
-    const pvec o[3] = { LD(ox), LD(oy), LD(oz) }, d[3] = { LD(dx), LD(dy), LD(dz) };
-    const pvec tmin = LD(tmin), tmax = LD(tmax);
+            o[0] = LD(ox), o[1] = LD(oy), o[2] = LD(oz);
+            d[0] = LD(dx), d[1] = LD(dy), d[2] = LD(dz);
+            tmin = LD(tmin), tmax = LD(tmax);
 #undef LD
-    const pvec tiny = PV(set1)(SC_MIN_RCP_INPUT), one = PV(set1)(1.0f);
-    pvec ad[3];
-    uint32_t par = 0;
-    for (int k = 0; k < 3; k++) {
-        ad[k] = PV(abs)(d[k]);
-        par |= PV(bits)(PV(lt)(ad[k], tiny));
+        }
+        for (int k = 0; k < 3; k++)
+            ad[k] = PV(abs)(d[k]);
+        if (pass)
+            break;
+        for (int k = 0; k < 3; k++)
+            par |= PV(bits)(PV(lt)(ad[k], tiny));
+        par &= lanes;
+        if (!par)
+            break;
+        /* parallel lanes: load the others again, now as copies of a
+         * lane that is traced here (rare) */
+        tl = lanes & ~par;
+        if (!tl) {
+            c->uniform = 1;
+            c->cone = 0;
+            return par;
+        }
     }
-    par &= lanes;
-    const uint32_t tl = lanes & ~par;
-    c->uniform = 1;
     c->cone = 0;
-    if (!tl)
-        return par;
+    uint32_t neg[3];
     for (int k = 0; k < 3; k++) {
         const pvec rd = PV(div)(one, d[k]);
         const pvec m = PV(max)(PV(abs)(PV(sub)(PV(set1)(bvh->root_lo[k]), o[k])),
@@ -151,64 +167,62 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
         const pvec pad = PV(fmadd)(PV(abs)(rd), g, PV(fmadd)(m, PV(set1)(0x1p-124f), PV(set1)(0x1p-122f)));
         const pvec ord = PV(mul)(o[k], rd);
         PV(store)(c->rd[k], rd);
-        const pvec on = PV(add)(ord, pad), of = PV(sub)(ord, pad);
-        PV(store)(c->ordn[k], on);
-        PV(store)(c->ordf[k], of);
+        PV(store)(c->ordn[k], PV(add)(ord, pad));
+        PV(store)(c->ordf[k], PV(sub)(ord, pad));
         PV(store)(c->org[k], o[k]);
-        c->neg[k] = PV(bits)(PV(lt)(d[k], PV(set1)(0))) & tl;
-        if (c->neg[k] != 0 && c->neg[k] != tl)
-            c->uniform = 0;
+        neg[k] = PV(bits)(PV(lt)(d[k], zero));
+        c->neg[k] = neg[k] & tl;
     }
-    /* sc_shear_axes: kz = 0; |d1| > |d0| -> 1; |d2| > |d_kz| -> 2 */
+    /* sc_shear_axes: kz = 0; |d1| > |d0| -> 1; |d2| > |d_kz| -> 2; then
+     * kx = kz + 1, ky = kx + 1 (mod 3), swapped where d[kz] < 0 */
     const PV(m) z1 = PV(gt)(ad[1], ad[0]);
-    const pvec akz = PV(sel)(z1, ad[1], ad[0]);
-    const PV(m) z2 = PV(gt)(ad[2], akz);
-    const uint32_t kz1 = PV(bits)(z1) & ~PV(bits)(z2), kz2 = PV(bits)(z2);
-    const uint32_t kz0 = ~(kz1 | kz2);
-    /* kx = kz + 1, ky = kx + 1 (mod 3), swapped where d[kz] < 0 */
-    const pvec dkz = PFN(pk_sel3)(kz1, kz2, d[0], d[1], d[2]);
-    const uint32_t sw = PV(bits)(PV(lt)(dkz, PV(set1)(0)));
+    const PV(m) z2 = PV(gt)(ad[2], PV(sel)(z1, ad[1], ad[0]));
+#define BYKZ(a0, a1, a2) PV(sel)(z2, (a2), PV(sel)(z1, (a1), (a0)))   /* kz 0 -> a0, 1 -> a1, 2 -> a2 */
+    const pvec dkz = BYKZ(d[0], d[1], d[2]);
+    const PV(m) sw = PV(lt)(dkz, zero);
     /* unswapped: kz 0 -> (1, 2), 1 -> (2, 0), 2 -> (0, 1) */
-    const uint32_t kx1 = kz0, kx2 = kz1, ky1 = kz2, ky2 = kz0;
-    c->kx1 = ((kx1 & ~sw) | (ky1 & sw)) & tl, c->kx2 = ((kx2 & ~sw) | (ky2 & sw)) & tl;
-    c->ky1 = ((ky1 & ~sw) | (kx1 & sw)) & tl, c->ky2 = ((ky2 & ~sw) | (kx2 & sw)) & tl;
-    c->kz1 = kz1 & tl, c->kz2 = kz2 & tl;
-    const pvec dkx = PFN(pk_sel3)(c->kx1, c->kx2, d[0], d[1], d[2]);
-    const pvec dky = PFN(pk_sel3)(c->ky1, c->ky2, d[0], d[1], d[2]);
-    PV(store)(c->Sx, PV(div)(dkx, dkz));
-    PV(store)(c->Sy, PV(div)(dky, dkz));
-    /* Sz = 1 / d[kz]: the traced lanes' rd on axis kz, the same division */
-    PV(store)(c->Sz, PFN(pk_sel3)(c->kz1, c->kz2, PV(load)(c->rd[0]), PV(load)(c->rd[1]), PV(load)(c->rd[2])));
+    const pvec dkx0 = BYKZ(d[1], d[2], d[0]), dky0 = BYKZ(d[2], d[0], d[1]);
+    PV(store)(c->Sx, PV(div)(PV(sel)(sw, dky0, dkx0), dkz));
+    PV(store)(c->Sy, PV(div)(PV(sel)(sw, dkx0, dky0), dkz));
+    /* Sz = 1 / d[kz]: the lane's rd on axis kz, the same division */
+    PV(store)(c->Sz, BYKZ(PV(load)(c->rd[0]), PV(load)(c->rd[1]), PV(load)(c->rd[2])));
+#undef BYKZ
     PV(store)(c->tmin, tmin);
     PV(store)(c->tmax, tmax);
-    for (uint32_t *mk = &c->kx1; mk <= &c->kz2; mk++)
-        if (*mk != 0 && *mk != tl)
-            c->uniform = 0;
+    const uint32_t b1 = PV(bits)(z1), b2 = PV(bits)(z2), bs = PV(bits)(sw);
+    const uint32_t kz1 = b1 & ~b2, kz2 = b2, kz0 = ~(kz1 | kz2) & full;
+    const uint32_t kx1 = (kz0 & ~bs) | (kz2 & bs), kx2 = (kz1 & ~bs) | (kz0 & bs);
+    const uint32_t ky1 = (kz2 & ~bs) | (kz0 & bs), ky2 = (kz0 & ~bs) | (kz1 & bs);
+    c->kx1 = kx1 & tl, c->kx2 = kx2 & tl, c->ky1 = ky1 & tl, c->ky2 = ky2 & tl;
+    c->kz1 = kz1 & tl, c->kz2 = kz2 & tl;
+    /* uniform: the octant and the shear axes (kz and the swap) the same
+     * in every lane; lane 0 holds a traced lane's ray */
+    uint32_t mixed = 0;
+    const uint32_t all[6] = { neg[0], neg[1], neg[2], kz1, kz2, bs };
+    for (int i = 0; i < 6; i++)
+        mixed |= all[i] ^ ((0u - (all[i] & 1)) & full);
+    c->uniform = mixed == 0;
+    c->oct = (int)((neg[0] & 1) | (neg[1] & 1) << 1 | (neg[2] & 1) << 2);
+    c->kx = (int)((kx1 & 1) | (kx2 & 1) << 1);
+    c->ky = (int)((ky1 & 1) | (ky2 & 1) << 1);
+    c->kz = (int)((kz1 & 1) | (kz2 & 1) << 1);
     if (c->uniform) {
         /* the frustum (pk_frustum_node) */
-        const PV(m) tm = PV(mask_from_bits)(tl);
-        const pvec pinf = PV(set1)(INFINITY), zero = PV(set1)(0);
         for (int k = 0; k < 3; k++) {
             const pvec rd = PV(load)(c->rd[k]);
-            c->fr_rdmin[k] = PV(hmin)(PV(sel)(tm, rd, pinf));
-            c->fr_rdmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(zero, rd), pinf));
-            c->fr_onmax[k] = -PV(hmin)(PV(sel)(tm, PV(sub)(zero, PV(load)(c->ordn[k])), pinf));
-            c->fr_ofmin[k] = PV(hmin)(PV(sel)(tm, PV(load)(c->ordf[k]), pinf));
+            c->fr_rdmin[k] = PV(hmin)(rd);
+            c->fr_rdmax[k] = -PV(hmin)(PV(sub)(zero, rd));
+            c->fr_onmax[k] = -PV(hmin)(PV(sub)(zero, PV(load)(c->ordn[k])));
+            c->fr_ofmin[k] = PV(hmin)(PV(load)(c->ordf[k]));
         }
-        c->fr_tmin = PV(hmin)(PV(sel)(tm, tmin, pinf));
+        c->fr_tmin = PV(hmin)(tmin);
     }
-    const uint32_t first = 1u << __builtin_ctz(tl);
-    c->oct = (c->neg[0] & first ? 1 : 0) | (c->neg[1] & first ? 2 : 0) | (c->neg[2] & first ? 4 : 0);
-    c->kx = c->kx1 & first ? 1 : c->kx2 & first ? 2 : 0;
-    c->ky = c->ky1 & first ? 1 : c->ky2 & first ? 2 : 0;
-    c->kz = c->kz1 & first ? 1 : c->kz2 & first ? 2 : 0;
     if (cone && __builtin_popcount(tl) > 1) {
-        /* one origin: every traced lane's bits equal the first's */
-        const unsigned ff = (unsigned)__builtin_ctz(tl);
-        uint32_t same = tl;
+        /* one origin: every lane's bits equal lane 0's */
+        uint32_t same = full;
         for (int k = 0; k < 3; k++)
-            same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][ff])));
-        if (same == tl)
+            same &= PV(bits)(PV(eq)(o[k], PV(set1)(c->org[k][0])));
+        if (same == full)
             c->cone = PFN(pk_cone)(c, d[0], d[1], d[2], tl, r);
     }
     return par;
@@ -542,6 +556,10 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                         *rz = rows + (size_t)(UNI ? c->kz : 0) * W;
             const pvec okx = PV(load)(c->org[UNI ? c->kx : 0]), oky = PV(load)(c->org[UNI ? c->ky : 0]),
                        okz = PV(load)(c->org[UNI ? c->kz : 0]);
+            /* lanes of other shear axes: each lane's axes, picked once a leaf */
+            const PV(m) mx1 = PV(mask_from_bits)(UNI ? 0 : c->kx1), mx2 = PV(mask_from_bits)(UNI ? 0 : c->kx2);
+            const PV(m) my1 = PV(mask_from_bits)(UNI ? 0 : c->ky1), my2 = PV(mask_from_bits)(UNI ? 0 : c->ky2);
+            const PV(m) mz1 = PV(mask_from_bits)(UNI ? 0 : c->kz1), mz2 = PV(mask_from_bits)(UNI ? 0 : c->kz2);
             for (; live && m; live &= live - 1) {
                 const unsigned i = (unsigned)__builtin_ctz(live);
                 if (STATS)
@@ -564,15 +582,17 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     pvec A0 = PV(sub)(VTX(0, 0), o0), A1 = PV(sub)(VTX(0, 1), o1), A2 = PV(sub)(VTX(0, 2), o2);
                     pvec B0 = PV(sub)(VTX(1, 0), o0), B1 = PV(sub)(VTX(1, 1), o1), B2 = PV(sub)(VTX(1, 2), o2);
                     pvec C0 = PV(sub)(VTX(2, 0), o0), C1 = PV(sub)(VTX(2, 1), o1), C2 = PV(sub)(VTX(2, 2), o2);
-                    Akz = PFN(pk_sel3)(c->kz1, c->kz2, A0, A1, A2);
-                    Bkz = PFN(pk_sel3)(c->kz1, c->kz2, B0, B1, B2);
-                    Ckz = PFN(pk_sel3)(c->kz1, c->kz2, C0, C1, C2);
-                    Ax = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, A0, A1, A2), PV(mul)(Sx, Akz));
-                    Ay = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, A0, A1, A2), PV(mul)(Sy, Akz));
-                    Bx = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, B0, B1, B2), PV(mul)(Sx, Bkz));
-                    By = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, B0, B1, B2), PV(mul)(Sy, Bkz));
-                    Cx = PV(sub)(PFN(pk_sel3)(c->kx1, c->kx2, C0, C1, C2), PV(mul)(Sx, Ckz));
-                    Cy = PV(sub)(PFN(pk_sel3)(c->ky1, c->ky2, C0, C1, C2), PV(mul)(Sy, Ckz));
+#define SEL3(k, a0, a1, a2) PV(sel)(m##k##2, (a2), PV(sel)(m##k##1, (a1), (a0)))
+                    Akz = SEL3(z, A0, A1, A2);
+                    Bkz = SEL3(z, B0, B1, B2);
+                    Ckz = SEL3(z, C0, C1, C2);
+                    Ax = PV(sub)(SEL3(x, A0, A1, A2), PV(mul)(Sx, Akz));
+                    Ay = PV(sub)(SEL3(y, A0, A1, A2), PV(mul)(Sy, Akz));
+                    Bx = PV(sub)(SEL3(x, B0, B1, B2), PV(mul)(Sx, Bkz));
+                    By = PV(sub)(SEL3(y, B0, B1, B2), PV(mul)(Sy, Bkz));
+                    Cx = PV(sub)(SEL3(x, C0, C1, C2), PV(mul)(Sx, Ckz));
+                    Cy = PV(sub)(SEL3(y, C0, C1, C2), PV(mul)(Sy, Ckz));
+#undef SEL3
                 }
 #undef VTX
                 const pvec U = PV(sub)(PV(mul)(Cx, By), PV(mul)(Cy, Bx));
