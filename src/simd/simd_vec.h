@@ -48,6 +48,8 @@ SC_VI SC_ATTR_SSE4 f32x4_t f32x4_fmsub(f32x4_t a, f32x4_t b, f32x4_t c) { return
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_max(f32x4_t a, f32x4_t b) { return _mm_max_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_min(f32x4_t a, f32x4_t b) { return _mm_min_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_t f32x4_abs(f32x4_t a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+/* -a by its sign bit: no arithmetic, so no flush of a subnormal a */
+SC_VI SC_ATTR_SSE4 f32x4_t f32x4_neg(f32x4_t a) { return _mm_xor_ps(_mm_set1_ps(-0.0f), a); }
 SC_VI SC_ATTR_SSE4 f32x4_m f32x4_lt(f32x4_t a, f32x4_t b) { return _mm_cmplt_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_m f32x4_le(f32x4_t a, f32x4_t b) { return _mm_cmple_ps(a, b); }
 SC_VI SC_ATTR_SSE4 f32x4_m f32x4_gt(f32x4_t a, f32x4_t b) { return _mm_cmpgt_ps(a, b); }
@@ -142,6 +144,7 @@ SC_VI SC_ATTR_AVX2 f32x8_t f32x8_fmsub(f32x8_t a, f32x8_t b, f32x8_t c) { return
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_max(f32x8_t a, f32x8_t b) { return _mm256_max_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_min(f32x8_t a, f32x8_t b) { return _mm256_min_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_abs(f32x8_t a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+SC_VI SC_ATTR_AVX2 f32x8_t f32x8_neg(f32x8_t a) { return _mm256_xor_ps(_mm256_set1_ps(-0.0f), a); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sqrt(f32x8_t a) { return _mm256_sqrt_ps(a); }
 /* 1/sqrt(a) within 1.5 * 2^-12 relative (rsqrtps): inf for 0, NaN below. */
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_rsqrt(f32x8_t a) { return _mm256_rsqrt_ps(a); }
@@ -245,6 +248,7 @@ SC_VI SC_ATTR_AVX512 f32x16_t f32x16_fmsub(f32x16_t a, f32x16_t b, f32x16_t c) {
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_max(f32x16_t a, f32x16_t b) { return _mm512_max_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_min(f32x16_t a, f32x16_t b) { return _mm512_min_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_abs(f32x16_t a) { return _mm512_abs_ps(a); }
+SC_VI SC_ATTR_AVX512 f32x16_t f32x16_neg(f32x16_t a) { return _mm512_xor_ps(_mm512_set1_ps(-0.0f), a); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sqrt(f32x16_t a) { return _mm512_sqrt_ps(a); }
 /* 1/sqrt(a) within 2^-14 relative (vrsqrt14ps): inf for 0, NaN below. */
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_rsqrt(f32x16_t a) { return _mm512_rsqrt14_ps(a); }

@@ -290,10 +290,26 @@ typedef struct {
  * (node_bvh8_slab.h) passes therefore passes here; dist gets the near
  * bound, a lower bound of every lane's entry distance. The lanes' offsets
  * b_i differ with their origins, so this holds for any uniform packet; one
- * origin (camera rays) only makes the bounds tight. */
+ * origin (camera rays) only makes the bounds tight. On AVX-512 the same r
+ * as the smaller of the two products (the larger for the far plane): x r
+ * is smallest for that r, and rounding is monotone. GCC lowers blendv
+ * there to an integer compare of the row, which it moves through the
+ * stack (about 60 instructions a node, against 30). */
 SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 *node, int nr0, int nr1,
                                             int nr2, int fr0, int fr1, int fr2, float tmax_hi, float *dist)
 {
+#if SC_X86_AVX512
+#define FNEAR(row, k)                                                                              \
+    _mm256_min_ps(_mm256_fmsub_ps(_mm256_load_ps(node->b[row]), _mm256_set1_ps(c->fr_rdmin[k]),    \
+                                  _mm256_set1_ps(c->fr_onmax[k])),                                 \
+                  _mm256_fmsub_ps(_mm256_load_ps(node->b[row]), _mm256_set1_ps(c->fr_rdmax[k]),    \
+                                  _mm256_set1_ps(c->fr_onmax[k])))
+#define FFAR(row, k)                                                                               \
+    _mm256_max_ps(_mm256_fmsub_ps(_mm256_load_ps(node->b[row]), _mm256_set1_ps(c->fr_rdmax[k]),    \
+                                  _mm256_set1_ps(c->fr_ofmin[k])),                                 \
+                  _mm256_fmsub_ps(_mm256_load_ps(node->b[row]), _mm256_set1_ps(c->fr_rdmin[k]),    \
+                                  _mm256_set1_ps(c->fr_ofmin[k])))
+#else
 #define FNEAR(row, k)                                                                              \
     _mm256_fmsub_ps(_mm256_load_ps(node->b[row]),                                               \
                     _mm256_blendv_ps(_mm256_set1_ps(c->fr_rdmin[k]), _mm256_set1_ps(c->fr_rdmax[k]), \
@@ -304,6 +320,7 @@ SC_X86_INLINE unsigned PFN(pk_frustum_node)(const pk_ctx *c, const sc_bvh_node8 
                     _mm256_blendv_ps(_mm256_set1_ps(c->fr_rdmax[k]), _mm256_set1_ps(c->fr_rdmin[k]), \
                                      _mm256_load_ps(node->b[row])),                             \
                     _mm256_set1_ps(c->fr_ofmin[k]))
+#endif
     __m256 tn = _mm256_max_ps(_mm256_max_ps(FNEAR(nr0, 0), FNEAR(nr1, 1)),
                               _mm256_max_ps(FNEAR(nr2, 2), _mm256_set1_ps(c->fr_tmin)));
     __m256 tf = _mm256_min_ps(_mm256_min_ps(FFAR(fr0, 0), FFAR(fr1, 1)),
@@ -548,14 +565,22 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 }
                 live &= ~cull;
             }
-            const pvec o0 = PV(load)(c->org[0]), o1 = PV(load)(c->org[1]), o2 = PV(load)(c->org[2]);
+            /* v - o as (-o) + v: IEEE subtraction is the addition of
+             * the negation, and addition commutes, so the bits are the
+             * single ray's (-o by its sign bit, so a subnormal origin
+             * reads the same under DAZ and flushes the same under FTZ);
+             * with the vertex as the second operand, AVX-512 folds its
+             * broadcast into the addition */
+            const pvec o0 = PV(neg)(PV(load)(c->org[0])), o1 = PV(neg)(PV(load)(c->org[1])),
+                       o2 = PV(neg)(PV(load)(c->org[2]));
             const pvec Sx = PV(load)(c->Sx), Sy = PV(load)(c->Sy), Sz = PV(load)(c->Sz);
             /* a uniform packet's rows kx, ky, kz of vertex A; B and C
              * follow at 3W and 6W (sc_leaf_at) */
             const float *rx = rows + (size_t)(UNI ? c->kx : 0) * W, *ry = rows + (size_t)(UNI ? c->ky : 0) * W,
                         *rz = rows + (size_t)(UNI ? c->kz : 0) * W;
-            const pvec okx = PV(load)(c->org[UNI ? c->kx : 0]), oky = PV(load)(c->org[UNI ? c->ky : 0]),
-                       okz = PV(load)(c->org[UNI ? c->kz : 0]);
+            const pvec okx = UNI ? (c->kx == 0 ? o0 : c->kx == 1 ? o1 : o2) : o0;
+            const pvec oky = UNI ? (c->ky == 0 ? o0 : c->ky == 1 ? o1 : o2) : o0;
+            const pvec okz = UNI ? (c->kz == 0 ? o0 : c->kz == 1 ? o1 : o2) : o0;
             /* lanes of other shear axes: each lane's axes, picked once a leaf */
             const PV(m) mx1 = PV(mask_from_bits)(UNI ? 0 : c->kx1), mx2 = PV(mask_from_bits)(UNI ? 0 : c->kx2);
             const PV(m) my1 = PV(mask_from_bits)(UNI ? 0 : c->ky1), my2 = PV(mask_from_bits)(UNI ? 0 : c->ky2);
@@ -568,20 +593,20 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                 pvec Akz, Bkz, Ckz, Ax, Ay, Bx, By, Cx, Cy;
                 if (UNI) {
                     const size_t ia = i, ib = i + 3 * (size_t)W, ic = i + 6 * (size_t)W;
-                    Akz = PV(sub)(PV(set1)(rz[ia]), okz);
-                    Bkz = PV(sub)(PV(set1)(rz[ib]), okz);
-                    Ckz = PV(sub)(PV(set1)(rz[ic]), okz);
-                    Ax = PV(sub)(PV(sub)(PV(set1)(rx[ia]), okx), PV(mul)(Sx, Akz));
-                    Ay = PV(sub)(PV(sub)(PV(set1)(ry[ia]), oky), PV(mul)(Sy, Akz));
-                    Bx = PV(sub)(PV(sub)(PV(set1)(rx[ib]), okx), PV(mul)(Sx, Bkz));
-                    By = PV(sub)(PV(sub)(PV(set1)(ry[ib]), oky), PV(mul)(Sy, Bkz));
-                    Cx = PV(sub)(PV(sub)(PV(set1)(rx[ic]), okx), PV(mul)(Sx, Ckz));
-                    Cy = PV(sub)(PV(sub)(PV(set1)(ry[ic]), oky), PV(mul)(Sy, Ckz));
+                    Akz = PV(add)(okz, PV(set1)(rz[ia]));
+                    Bkz = PV(add)(okz, PV(set1)(rz[ib]));
+                    Ckz = PV(add)(okz, PV(set1)(rz[ic]));
+                    Ax = PV(sub)(PV(add)(okx, PV(set1)(rx[ia])), PV(mul)(Sx, Akz));
+                    Ay = PV(sub)(PV(add)(oky, PV(set1)(ry[ia])), PV(mul)(Sy, Akz));
+                    Bx = PV(sub)(PV(add)(okx, PV(set1)(rx[ib])), PV(mul)(Sx, Bkz));
+                    By = PV(sub)(PV(add)(oky, PV(set1)(ry[ib])), PV(mul)(Sy, Bkz));
+                    Cx = PV(sub)(PV(add)(okx, PV(set1)(rx[ic])), PV(mul)(Sx, Ckz));
+                    Cy = PV(sub)(PV(add)(oky, PV(set1)(ry[ic])), PV(mul)(Sy, Ckz));
                 } else {
                     /* A[k] = v - o for every axis, then the lane's axes */
-                    pvec A0 = PV(sub)(VTX(0, 0), o0), A1 = PV(sub)(VTX(0, 1), o1), A2 = PV(sub)(VTX(0, 2), o2);
-                    pvec B0 = PV(sub)(VTX(1, 0), o0), B1 = PV(sub)(VTX(1, 1), o1), B2 = PV(sub)(VTX(1, 2), o2);
-                    pvec C0 = PV(sub)(VTX(2, 0), o0), C1 = PV(sub)(VTX(2, 1), o1), C2 = PV(sub)(VTX(2, 2), o2);
+                    pvec A0 = PV(add)(o0, VTX(0, 0)), A1 = PV(add)(o1, VTX(0, 1)), A2 = PV(add)(o2, VTX(0, 2));
+                    pvec B0 = PV(add)(o0, VTX(1, 0)), B1 = PV(add)(o1, VTX(1, 1)), B2 = PV(add)(o2, VTX(1, 2));
+                    pvec C0 = PV(add)(o0, VTX(2, 0)), C1 = PV(add)(o1, VTX(2, 1)), C2 = PV(add)(o2, VTX(2, 2));
 #define SEL3(k, a0, a1, a2) PV(sel)(m##k##2, (a2), PV(sel)(m##k##1, (a1), (a0)))
                     Akz = SEL3(z, A0, A1, A2);
                     Bkz = SEL3(z, B0, B1, B2);
@@ -603,14 +628,17 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                  * the three-way sign test only in lanes with a NaN edge
                  * function, whose det and t are NaN, so never a hit. */
                 const pvec emin = PV(min)(PV(min)(U, V), Wv), emax = PV(max)(PV(max)(U, V), Wv);
-                const uint32_t both = PV(bits)(PV(and)(PV(lt)(emin, zero), PV(gt)(emax, zero)));
-                uint32_t zr = PV(bits)(PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero))) & m;
+                const PV(m) zm = PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero));
                 const pvec det = PV(add)(PV(add)(U, V), Wv);
-                uint32_t cand = ~both & ~PV(bits)(PV(eq)(det, zero)) & m & ~zr;
-                const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
+                /* not candidates: both signs, det = 0, or an edge function
+                 * exactly 0 (those lanes: zr, the double test below) */
+                const PV(m) out = PV(or)(PV(or)(PV(and)(PV(lt)(emin, zero), PV(gt)(emax, zero)), PV(eq)(det, zero)), zm);
+                uint32_t zr = PV(bits)(zm) & m;
+                const uint32_t cand = ~PV(bits)(out) & m;
                 uint32_t h = 0;
                 pvec tt = zero;
                 if (cand) {
+                    const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
                     pvec T = PV(add)(PV(add)(PV(mul)(U, Az), PV(mul)(V, Bz)), PV(mul)(Wv, Cz));
                     tt = PV(div)(T, det);
                     h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, best.t))) & cand;
@@ -667,8 +695,8 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
                     float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
                     PFN(pk_best_lanes) a;
                     PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
-                    PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, Az), PV(store)(bz, Bz);
-                    PV(store)(cz, Cz);
+                    PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, PV(mul)(Sz, Akz));
+                    PV(store)(bz, PV(mul)(Sz, Bkz)), PV(store)(cz, PV(mul)(Sz, Ckz));
                     PFN(pk_best_spill)(&best, &a);
                     for (uint32_t e = zr; e; e &= e - 1) {
                         unsigned l = (unsigned)__builtin_ctz(e);
