@@ -559,6 +559,30 @@ static void test_streams(void **state)
     tmesh_free(&m);
 }
 
+/* Kinds of ray sc_ray_valid refuses, made from a valid ray (w: which
+ * axis, for some kinds): those before BAD_ALWAYS in every MXCSR mode, the
+ * subnormal ones only where DAZ reads them as 0. */
+enum { BAD_NONE, BAD_ORG_NAN, BAD_ORG_FAR, BAD_ORG_INF, BAD_DIR_INF, BAD_DIR_NAN, BAD_DIR_ZERO, BAD_TMIN_NEG,
+       BAD_TMIN_NAN, BAD_TMAX_NAN, BAD_ALWAYS, BAD_DIR_SUB = BAD_ALWAYS, BAD_TMIN_SUB, BAD_COUNT };
+
+static void spoil_ray(sc_ray *r, int bad, unsigned w)
+{
+    switch (bad) {
+    case BAD_ORG_NAN: r->org[1] = NAN; break;
+    case BAD_ORG_FAR: r->org[2] = -1e18f; break;
+    case BAD_ORG_INF: r->org[0] = INFINITY; break;
+    case BAD_DIR_INF: r->dir[0] = INFINITY; break;
+    case BAD_DIR_NAN: r->dir[2 - w % 3] = NAN; break;
+    case BAD_DIR_ZERO: r->dir[0] = r->dir[1] = r->dir[2] = -0.0f; break;
+    case BAD_TMIN_NEG: r->tmin = -0x1p-126f; break;   /* normal: DAZ reads a subnormal as 0 */
+    case BAD_TMIN_NAN: r->tmin = NAN; break;
+    case BAD_TMAX_NAN: r->tmax = NAN; break;
+    case BAD_DIR_SUB: r->dir[0] = r->dir[1] = 0, r->dir[2] = 0x1p-140f; break;
+    case BAD_TMIN_SUB: r->tmin = -0x1p-140f; break;
+    default: break;
+    }
+}
+
 /* The streams' gather of a 16-ray run (stream_gather.h): every ISA level's
  * must give the scalar specification's answer and rows bit for bit, on
  * camera and mixed runs at a byte stride and on runs with one refused ray
@@ -590,8 +614,6 @@ static void test_stream_gather(void **state)
     assert_int_equal(sc_stream_gather16_ref((const char *)run, sizeof *run, lo, hi, &ref), SC_GATHER_REFUSED);
 
     /* each kind of refused ray (sc_ray_valid) */
-    enum { BAD_NONE, BAD_ORG_NAN, BAD_ORG_FAR, BAD_DIR_INF, BAD_DIR_NAN, BAD_DIR_ZERO, BAD_TMIN_NEG, BAD_TMIN_NAN,
-           BAD_TMAX_NAN, BAD_COUNT };
     const int where[3] = { 0, 6, 15 };
     const sc_isa start = sc_isa_active();
     size_t runs = 0;
@@ -601,23 +623,12 @@ static void test_stream_gather(void **state)
             continue;
         for (size_t p = 0; p < NPACK; p++)
             for (int src = 0; src < 2; src++)
-                for (int bad = 0; bad < BAD_COUNT; bad++)
+                for (int bad = 0; bad < BAD_ALWAYS; bad++)
                     for (int w = 0; w < (bad ? 3 : 1); w++) {
                         const packets *pk = src ? &b : &a;
                         for (int i = 0; i < 16; i++)
                             run[i].r = pk->rays[16 * p + (size_t)i];
-                        sc_ray *r = &run[where[w]].r;
-                        switch (bad) {
-                        case BAD_ORG_NAN: r->org[1] = NAN; break;
-                        case BAD_ORG_FAR: r->org[2] = -1e18f; break;
-                        case BAD_DIR_INF: r->dir[0] = INFINITY; break;
-                        case BAD_DIR_NAN: r->dir[2] = NAN; break;
-                        case BAD_DIR_ZERO: r->dir[0] = r->dir[1] = r->dir[2] = -0.0f; break;
-                        case BAD_TMIN_NEG: r->tmin = -0x1p-126f; break;   /* normal: DAZ reads a subnormal as 0 */
-                        case BAD_TMIN_NAN: r->tmin = NAN; break;
-                        case BAD_TMAX_NAN: r->tmax = NAN; break;
-                        default: break;
-                        }
+                        spoil_ray(&run[where[w]].r, bad, (unsigned)w);
                         memset(&ref, 0x5a, sizeof ref), memset(&got, 0x5a, sizeof got);
                         const int want = sc_stream_gather16_ref((const char *)run, sizeof *run, lo, hi, &ref);
                         const int have = k->trace[0].stream_gather16((const char *)run, sizeof *run, lo, hi, &got);
@@ -647,8 +658,6 @@ static void test_packet_valid(void **state)
     scene_icosphere(&m, 1, 1.0, c);
     packets a;
     make_packets(&m, K_MIXED, 33, &a);
-    enum { BAD_NONE, BAD_ORG_NAN, BAD_ORG_FAR, BAD_ORG_INF, BAD_DIR_INF, BAD_DIR_NAN, BAD_DIR_ZERO, BAD_DIR_SUB,
-           BAD_TMIN_NEG, BAD_TMIN_SUB, BAD_TMIN_NAN, BAD_TMAX_NAN, BAD_COUNT };
     const unsigned csr = _mm_getcsr();
     float rows[8 * 16] __attribute__((aligned(64)));
     int32_t valid[16];
@@ -672,21 +681,7 @@ static void test_packet_valid(void **state)
                                 }
                                 valid[where] = on ? (int32_t)(w + 1) : 0;   /* any nonzero is valid */
                                 sc_ray *r = &rs[where];
-                                switch (bad) {
-                                case BAD_ORG_NAN: r->org[1] = NAN; break;
-                                case BAD_ORG_FAR: r->org[2] = -1e18f; break;
-                                case BAD_ORG_INF: r->org[0] = INFINITY; break;
-                                case BAD_DIR_INF: r->dir[0] = INFINITY; break;
-                                case BAD_DIR_NAN: r->dir[2 - w] = NAN; break;
-                                case BAD_DIR_ZERO: r->dir[0] = r->dir[1] = r->dir[2] = -0.0f; break;
-                                /* refused only where DAZ reads it as 0 */
-                                case BAD_DIR_SUB: r->dir[0] = r->dir[1] = 0, r->dir[2] = 0x1p-140f; break;
-                                case BAD_TMIN_NEG: r->tmin = -0x1p-126f; break;
-                                case BAD_TMIN_SUB: r->tmin = -0x1p-140f; break;
-                                case BAD_TMIN_NAN: r->tmin = NAN; break;
-                                case BAD_TMAX_NAN: r->tmax = NAN; break;
-                                default: break;
-                                }
+                                spoil_ray(r, bad, w);
                                 for (unsigned i = 0; i < W; i++) {
                                     rows[i] = rs[i].org[0], rows[W + i] = rs[i].org[1];
                                     rows[2 * W + i] = rs[i].org[2], rows[3 * W + i] = rs[i].tmin;
