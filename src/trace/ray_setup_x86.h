@@ -6,6 +6,7 @@
 #ifndef SPHERECULL_TRACE_RAY_SETUP_X86_H
 #define SPHERECULL_TRACE_RAY_SETUP_X86_H
 
+#include <float.h>
 #include <immintrin.h>
 
 #include "bvh/bvh_internal.h"
@@ -202,37 +203,40 @@ mask8(__m256 m)
     return (unsigned)_mm256_movemask_ps(m);
 }
 
-/* sc_packet_valid_ref eight lanes at a time, with sc_ray_valid's compares
- * (isfinite(d) as |d| <= FLT_MAX, which NaN fails). The public packet calls
- * check every packet: lane by lane in SSE this was about 330 instructions a
- * 16-ray packet, a tenth of tracing a camera packet. */
-static SC_TARGET int64_t packet_valid(const int32_t *valid, const float *rows, unsigned K)
+/* sc_ray_valid on eight rays in rows r[0..8) (ox oy oz tmin dx dy dz tmax)
+ * as a lane mask, with its compares: isfinite(d) as |d| <= FLT_MAX, which
+ * NaN fails. packet_valid and stream_gather16 check their rays with it. */
+SC_X86_INLINE __m256 rays_ok8(const __m256 r[8])
 {
     const __m256 sgn = _mm256_set1_ps(-0.0f), omax = _mm256_set1_ps(SC_MAX_ORIGIN), fmax = _mm256_set1_ps(FLT_MAX),
                  zero = _mm256_setzero_ps();
+    __m256 ok = _mm256_and_ps(_mm256_cmp_ps(r[3], zero, _CMP_GE_OQ), _mm256_cmp_ps(r[7], r[7], _CMP_ORD_Q));
+    __m256 nz = zero;
+    for (int a = 0; a < 3; a++) {
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sgn, r[a]), omax, _CMP_LT_OQ));
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sgn, r[4 + a]), fmax, _CMP_LE_OQ));
+        nz = _mm256_or_ps(nz, _mm256_cmp_ps(r[4 + a], zero, _CMP_NEQ_UQ));
+    }
+    return _mm256_and_ps(ok, nz);
+}
+
+/* sc_packet_valid_ref eight lanes at a time. The public packet calls check
+ * every packet: lane by lane in SSE this was about 330 instructions a
+ * 16-ray packet, a tenth of tracing a camera packet. */
+static SC_TARGET int64_t packet_valid(const int32_t *valid, const float *rows, unsigned K)
+{
     uint32_t lanes = 0, bad = 0;
     for (unsigned i = 0; i < K; i += 8) {
-#define ROW(f) _mm256_loadu_ps(rows + (f) * K + i)
-        const __m256 dx = ROW(4), dy = ROW(5), dz = ROW(6), tmax = ROW(7);
-        __m256 ok = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sgn, ROW(0)), omax, _CMP_LT_OQ),
-                                  _mm256_cmp_ps(_mm256_andnot_ps(sgn, ROW(1)), omax, _CMP_LT_OQ));
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sgn, ROW(2)), omax, _CMP_LT_OQ));
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps(ROW(3), zero, _CMP_GE_OQ));
-#undef ROW
-        const __m256 ad = _mm256_max_ps(_mm256_max_ps(_mm256_andnot_ps(sgn, dx), _mm256_andnot_ps(sgn, dy)),
-                                        _mm256_andnot_ps(sgn, dz));
-        /* max of the |d_k| drops a NaN operand but the last: NaN checks apart */
-        const __m256 nan = _mm256_or_ps(_mm256_cmp_ps(dx, dy, _CMP_UNORD_Q), _mm256_cmp_ps(dz, tmax, _CMP_UNORD_Q));
-        ok = _mm256_andnot_ps(nan, _mm256_and_ps(ok, _mm256_cmp_ps(ad, fmax, _CMP_LE_OQ)));
-        /* some d_k != 0: the largest |d_k| is above 0 */
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps(ad, zero, _CMP_GT_OQ));
+        __m256 r[8];
+        for (unsigned f = 0; f < 8; f++)
+            r[f] = _mm256_loadu_ps(rows + f * K + i);
         const __m256i v = _mm256_loadu_si256((const __m256i *)(const void *)(valid + i));
-        const uint32_t vm = (uint32_t)_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))) ^ 0xffu;
+        const uint32_t vm =
+            (uint32_t)_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()))) ^ 0xffu;
         lanes |= vm << i;
-        bad |= (vm & ~(uint32_t)_mm256_movemask_ps(ok)) << i;
+        bad |= (vm & ~(uint32_t)_mm256_movemask_ps(rays_ok8(r))) << i;
     }
     return bad ? (int64_t)-1 : (int64_t)lanes;
 }
-
 
 #endif

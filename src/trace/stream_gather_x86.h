@@ -39,8 +39,7 @@ SC_X86_INLINE float lanes_spread8(__m256 lo, __m256 hi)
 static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const float *lo, const float *hi,
                                      sc_ray_packet16 *p)
 {
-    const __m256 sgn = _mm256_set1_ps(-0.0f), omax = _mm256_set1_ps(SC_MAX_ORIGIN), fmax = _mm256_set1_ps(FLT_MAX),
-                 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    const __m256 sgn = _mm256_set1_ps(-0.0f), one = _mm256_set1_ps(1.0f);
     float *soa = p->ox;
     __m256 dlo[3], dhi[3], olo[3], ohi[3], ok = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     for (unsigned h = 0; h < 16; h += 8) {
@@ -50,16 +49,9 @@ static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const 
         transpose8x8(r);   /* ox oy oz tmin dx dy dz tmax */
         for (unsigned k = 0; k < 8; k++)
             _mm256_store_ps(soa + k * 16 + h, r[k]);
-        __m256 nz = zero, l1 = zero;
-        for (int a = 0; a < 3; a++) {
-            const __m256 ad = _mm256_andnot_ps(sgn, r[4 + a]);
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sgn, r[a]), omax, _CMP_LT_OQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(ad, fmax, _CMP_LE_OQ));
-            nz = _mm256_or_ps(nz, _mm256_cmp_ps(r[4 + a], zero, _CMP_NEQ_UQ));
-            l1 = a ? _mm256_add_ps(l1, ad) : ad;
-        }
-        ok = _mm256_and_ps(ok, _mm256_and_ps(nz, _mm256_cmp_ps(r[3], zero, _CMP_GE_OQ)));
-        ok = _mm256_and_ps(ok, _mm256_cmp_ps(r[7], r[7], _CMP_ORD_Q));
+        ok = _mm256_and_ps(ok, rays_ok8(r));
+        const __m256 l1 = _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sgn, r[4]), _mm256_andnot_ps(sgn, r[5])),
+                                        _mm256_andnot_ps(sgn, r[6]));
         const __m256 inv = _mm256_div_ps(one, l1);
         for (int a = 0; a < 3; a++) {
             const __m256 u = _mm256_mul_ps(r[4 + a], inv);

@@ -1,7 +1,6 @@
 /* Public entry points: argument checks, then the traversal kernels of the
  * active ISA level (src/isa) for the BVH's triangle test. A NULL stats
  * pointer selects the kernel compiled without counters. */
-#include <float.h>
 #include <stddef.h>
 #include <string.h>
 #if defined(__SSE2__)

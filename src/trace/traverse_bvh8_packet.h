@@ -117,6 +117,12 @@ SC_X86_INLINE int PFN(pk_cone)(pk_ctx *c, pvec dx, pvec dy, pvec dz, uint32_t la
     return 1;
 }
 
+/* Lane l's axis from the lanes whose axis is 1 (m1) and 2 (m2). */
+SC_X86_INLINE int PFN(pk_axis)(uint32_t m1, uint32_t m2, unsigned l)
+{
+    return (int)((m1 >> l & 1) | (m2 >> l & 1) << 1);
+}
+
 /* The smallest lane of each of v[0..16): out[i] = min of v[i] (no NaN
  * lanes). A transposing tree, each level halving the vectors with one
  * shuffle pair and one min, instead of 16 reductions of one vector each:
@@ -249,9 +255,7 @@ SC_X86_INLINE uint32_t PFN(pk_init)(pk_ctx *c, const sc_bvh *bvh, const PKT *r, 
         mixed |= all[i] ^ ((0u - (all[i] & 1)) & full);
     c->uniform = mixed == 0;
     c->oct = (int)((neg[0] & 1) | (neg[1] & 1) << 1 | (neg[2] & 1) << 2);
-    c->kx = (int)((kx1 & 1) | (kx2 & 1) << 1);
-    c->ky = (int)((ky1 & 1) | (ky2 & 1) << 1);
-    c->kz = (int)((kz1 & 1) | (kz2 & 1) << 1);
+    c->kx = PFN(pk_axis)(kx1, kx2, 0), c->ky = PFN(pk_axis)(ky1, ky2, 0), c->kz = PFN(pk_axis)(kz1, kz2, 0);
     if (c->uniform) {
         /* the frustum (pk_frustum_node): 13 minima, maxima as minima of
          * the negations */
@@ -488,9 +492,9 @@ SC_X86_INLINE uint32_t PFN(pk_leaf_lanes)(const pk_ctx *c, const float *rows, un
     for (; m; m &= m - 1) {
         const unsigned l = (unsigned)__builtin_ctz(m);
         trace_ctx tc;
-        tc.kx = UNI ? c->kx : (int)((c->kx1 >> l & 1) | (c->kx2 >> l & 1) << 1);
-        tc.ky = UNI ? c->ky : (int)((c->ky1 >> l & 1) | (c->ky2 >> l & 1) << 1);
-        tc.kz = UNI ? c->kz : (int)((c->kz1 >> l & 1) | (c->kz2 >> l & 1) << 1);
+        tc.kx = UNI ? c->kx : PFN(pk_axis)(c->kx1, c->kx2, l);
+        tc.ky = UNI ? c->ky : PFN(pk_axis)(c->ky1, c->ky2, l);
+        tc.kz = UNI ? c->kz : PFN(pk_axis)(c->kz1, c->kz2, l);
         tc.okx = _mm256_set1_ps(c->org[tc.kx][l]);
         tc.oky = _mm256_set1_ps(c->org[tc.ky][l]);
         tc.okz = _mm256_set1_ps(c->org[tc.kz][l]);
@@ -510,15 +514,10 @@ SC_X86_INLINE uint32_t PFN(pk_leaf_lanes)(const pk_ctx *c, const float *rows, un
             occ |= 1u << l;
             continue;
         }
-        /* t[bi] <= the lane's best t; of equal t the smaller id */
         const unsigned bi = sc_nearest_lane(hm, t, prims);
-        if (t[bi] < a.t[l] || prims[bi] < a.prim[l]) {
-            float ng[3];
-            sc_leaf_normal(rows, W, bi, ng);
-            a.t[l] = t[bi], a.un[l] = un[bi], a.vn[l] = vn[bi], a.den[l] = den[bi], a.prim[l] = prims[bi];
-            a.ng[0][l] = ng[0], a.ng[1][l] = ng[1], a.ng[2][l] = ng[2];
-            best->got |= 1u << l;
-        }
+        float ng[3];
+        sc_leaf_normal(rows, W, bi, ng);
+        PFN(pk_best_offer)(best, &a, l, t[bi], un[bi] / den[bi], vn[bi] / den[bi], prims[bi], ng);
     }
     if (!ANY)
         PFN(pk_best_fill)(best, &a);
