@@ -403,11 +403,11 @@ static void test_api(void **state)
     tmesh_free(&m);
 }
 
-/* Incoherent runs of a stream go one by one through the kernels without
- * the octant branch (closest_incoherent / any_incoherent), and
- * sc_trace_closest takes them after rays of changing octants: on every ISA
- * level and triangle test they answer bit for bit as the scalar
- * specification's single-ray kernel does. */
+/* Incoherent runs of a stream go one by one through sc_trace_closest's
+ * kernel (which takes the one body after rays of changing octants) and
+ * any_incoherent (no octant branch): on every ISA level and triangle test
+ * they answer bit for bit as the scalar specification's single-ray kernel
+ * does. */
 static void test_streams_incoherent(void **state)
 {
     (void)state;

@@ -300,9 +300,15 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
     return status;
 }
 
-/* A BVH as a stream's target. Rays that failed the coherence tests go to
- * the kernels without the octant branch, which random directions
- * mispredict (not with statistics, which have one generic kernel anyway). */
+/* A BVH as a stream's target. Rays that failed the coherence tests:
+ * closest-hit rays take sc_trace_closest's kernel, whose octant history
+ * sends rays of changing octant to the one body with its rows from the
+ * direction's signs in a register, so a stream's random rays run as fast as
+ * single rays (closest_incoherent, which reads the signs as three floats
+ * for the top level's freshly stored object rays, was measurably slower
+ * here: docs/compare.md, thirtieth session); any-hit rays take the kernel
+ * without the octant branch, which random directions mispredict (not with
+ * statistics, which have one generic kernel anyway). */
 static void bvh_packet16(const void *obj, uint32_t lanes, const sc_ray_packet16 *rays, void *out, int any,
                          sc_trace_stats *stats)
 {
@@ -313,12 +319,8 @@ static sc_status bvh_single(const void *obj, const sc_ray *ray, void *out, int a
                             sc_trace_stats *stats)
 {
     const sc_bvh *bvh = obj;
-    if (incoherent && !stats && sc_ray_valid(ray)) {
-        const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-        if (any)
-            *(int32_t *)out = k->any_incoherent(bvh, ray);
-        else
-            k->closest_incoherent(bvh, ray, out);
+    if (any && incoherent && !stats && sc_ray_valid(ray)) {
+        *(int32_t *)out = sc_kernels_active()->trace[bvh->cfg.tri_test].any_incoherent(bvh, ray);
         return SC_OK;
     }
     if (!any)
