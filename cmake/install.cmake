@@ -2,7 +2,7 @@
 # and spherecull.pc. Included from the top-level CMakeLists.txt after every
 # target exists.
 #
-#   find_package(spherecull 0.2 REQUIRED [COMPONENTS scene render embree raster])
+#   find_package(spherecull 0.3 REQUIRED [COMPONENTS scene render embree raster])
 #   target_link_libraries(app PRIVATE spherecull::spherecull)      # shared (static if built without)
 #   target_link_libraries(app PRIVATE spherecull::spherecull_static)
 #   target_link_libraries(app PRIVATE spherecull::scene)           # an optional library

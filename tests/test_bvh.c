@@ -601,7 +601,8 @@ static void test_quality_high(void **state)
         for (int leaf = 1; leaf <= 8; leaf += 7) {
             sc_bvh_config cfg;
             sc_bvh_config_default(&cfg);
-            assert_int_equal(cfg.quality, SC_BUILD_QUALITY_MEDIUM);
+            assert_int_equal(cfg.quality, SC_BUILD_QUALITY_AUTO);
+            cfg.quality = SC_BUILD_QUALITY_MEDIUM;
             cfg.leaf_size = leaf;
             const sc_mesh_view mv = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
             sc_bvh *med = NULL, *high = NULL;
@@ -678,6 +679,7 @@ static void test_quality_high_soups(void **state)
         sc_bvh_config cfg;
         sc_bvh_config_default(&cfg);
         cfg.leaf_size = 1 + seed % 2;
+        cfg.quality = SC_BUILD_QUALITY_MEDIUM;
         const sc_mesh_view mv = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
         sc_bvh *med = NULL, *high = NULL;
         assert_int_equal(sc_bvh_build(&mv, &cfg, &med), SC_OK);
@@ -701,6 +703,86 @@ static void test_quality_high_soups(void **state)
     }
 }
 
+/* SC_BUILD_QUALITY_AUTO (sc_bvh.h): medium for a fine mesh, and for one on
+ * a two-triangle ground plane; high once the large triangles' boxes add up
+ * to 3 or more scene boxes; the same hits as medium either way; and
+ * sc_bvh_info.quality says which was built. */
+static sc_build_quality built_quality(const tmesh *m, sc_build_quality q)
+{
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.quality = q;
+    const sc_mesh_view mv = { m->pos, m->nv, m->idx, m->nt, 0, 0 };
+    sc_bvh *b = NULL;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &b), SC_OK);
+    sc_bvh_info info;
+    assert_int_equal(sc_bvh_get_info(b, &info), SC_OK);
+    sc_bvh_free(b);
+    return info.quality;
+}
+
+/* A slanted quad across the scene below ([-1, 2] in x and z): two
+ * triangles whose boxes each cover most of its box's area. */
+static void add_slab(tmesh *m, double y0, double y1)
+{
+    uint32_t a = tmesh_vertex(m, -1, y0, -1), b = tmesh_vertex(m, 2, y0, -1);
+    uint32_t c = tmesh_vertex(m, 2, y1, 2), d = tmesh_vertex(m, -1, y1, 2);
+    tmesh_tri(m, a, b, c);
+    tmesh_tri(m, a, c, d);
+}
+
+static void test_quality_auto(void **state)
+{
+    (void)state;
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    assert_int_equal(cfg.quality, SC_BUILD_QUALITY_AUTO);
+    const double c[3] = { 0.5, 0.5, 0.5 };
+    scene_case sc = { .name = "icosphere" };
+    scene_icosphere(&sc.m, 4, 0.5, c);      /* 5,120 triangles, none large */
+    assert_int_equal(built_quality(&sc.m, SC_BUILD_QUALITY_AUTO), SC_BUILD_QUALITY_MEDIUM);
+    assert_int_equal(built_quality(&sc.m, SC_BUILD_QUALITY_HIGH), SC_BUILD_QUALITY_HIGH);
+    /* on a ground plane: one large quad is not enough */
+    uint32_t a = tmesh_vertex(&sc.m, -1, 0, -1), b = tmesh_vertex(&sc.m, 2, 0, -1);
+    uint32_t d = tmesh_vertex(&sc.m, 2, 0, 2), e = tmesh_vertex(&sc.m, -1, 0, 2);
+    tmesh_tri(&sc.m, a, b, d);
+    tmesh_tri(&sc.m, a, d, e);
+    assert_int_equal(built_quality(&sc.m, SC_BUILD_QUALITY_AUTO), SC_BUILD_QUALITY_MEDIUM);
+    /* slanted slabs through the sphere, as an architectural scene's walls
+     * and floors: high */
+    for (int i = 0; i < 4; i++)
+        add_slab(&sc.m, 0.2 * i, 0.2 * i + 0.3);
+    assert_int_equal(built_quality(&sc.m, SC_BUILD_QUALITY_AUTO), SC_BUILD_QUALITY_HIGH);
+    assert_int_equal(built_quality(&sc.m, SC_BUILD_QUALITY_MEDIUM), SC_BUILD_QUALITY_MEDIUM);
+    /* the auto tree's hits are the medium tree's, bit for bit */
+    make_rays(&sc, 20000, 77);
+    const sc_mesh_view mv = { sc.m.pos, sc.m.nv, sc.m.idx, sc.m.nt, 0, 0 };
+    sc_bvh *med = NULL, *au = NULL, *high = NULL;
+    cfg.quality = SC_BUILD_QUALITY_MEDIUM;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &med), SC_OK);
+    cfg.quality = SC_BUILD_QUALITY_HIGH;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &high), SC_OK);
+    cfg.quality = SC_BUILD_QUALITY_AUTO;
+    assert_int_equal(sc_bvh_build(&mv, &cfg, &au), SC_OK);
+    /* the auto tree is the high one, byte for byte */
+    assert_int_equal(au->node_count, high->node_count);
+    assert_int_equal(au->leaf_bytes, high->leaf_bytes);
+    assert_memory_equal(au->nodes, high->nodes, au->node_count * sizeof(sc_bvh_node8) + au->leaf_bytes);
+    assert_true(au->sah_cost < med->sah_cost);
+    size_t diff = 0;
+    for (size_t i = 0; i < sc.nrays; i++) {
+        sc_hitrec x, y;
+        assert_int_equal(sc_trace_closest(med, &sc.rays[i], &x, NULL), SC_OK);
+        assert_int_equal(sc_trace_closest(au, &sc.rays[i], &y, NULL), SC_OK);
+        diff += memcmp(&x, &y, sizeof x) != 0;
+    }
+    assert_int_equal(diff, 0);
+    sc_bvh_free(med);
+    sc_bvh_free(au);
+    sc_bvh_free(high);
+    scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -716,6 +798,7 @@ int main(void)
         cmocka_unit_test(test_strided_layout),
         cmocka_unit_test(test_quality_high),
         cmocka_unit_test(test_quality_high_soups),
+        cmocka_unit_test(test_quality_auto),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -13,9 +13,9 @@
 #include "sc_api.h"
 
 #define SPHERECULL_VERSION_MAJOR 0
-#define SPHERECULL_VERSION_MINOR 2
+#define SPHERECULL_VERSION_MINOR 3
 #define SPHERECULL_VERSION_PATCH 0
-#define SPHERECULL_VERSION_STRING "0.2.0"
+#define SPHERECULL_VERSION_STRING "0.3.0"
 
 #ifdef __cplusplus
 extern "C" {

@@ -59,6 +59,9 @@ void sc_build_run_workers(void *(*fn)(void *), void *arg, int threads, size_t ex
 /* A configuration's thread count: 0 becomes the online CPUs (at most SC_BVH_MAX_THREADS). */
 int sc_build_threads(int cfg_threads);
 
+/* SC_BUILD_QUALITY_AUTO's choice for the triangle boxes pbox[0..n). */
+sc_build_quality sc_build_auto_quality(const box3 *pbox, size_t n);
+
 /* Measures the recorded subtrees, then writes them where the placing walk
  * put them, each on up to `threads` threads. */
 void sc_collapse_measure_jobs(bvh_builder *B, int threads);

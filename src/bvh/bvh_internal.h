@@ -19,6 +19,7 @@ struct sc_bvh {
     float root_lo[3], root_hi[3];
     size_t node_count, leaf_count, leaf_bytes, sphere_bytes, leaves_with_spheres;
     size_t triangles, skipped;
+    sc_build_quality quality;    /* the one built (cfg.quality, or AUTO's choice) */
     size_t references;           /* triangles in the leaves, counted once per leaf: more than
                                     triangles where the high quality's spatial splits cut some */
     int depth;
