@@ -93,7 +93,7 @@ typedef enum sc_build_quality {
                                      through several large triangles' boxes, the overlap that
                                      spatial splits remove: architectural and CAD scenes), medium
                                      for scanned and tessellated meshes, where the high build
-                                     costs 2-4x the time for nothing; sc_bvh_info.quality says
+                                     costs 1.5-5x the time for nothing; sc_bvh_info.quality says
                                      which was built */
     SC_BUILD_QUALITY_COUNT
 } sc_build_quality;
