@@ -42,7 +42,7 @@ void sc_bvh_config_default(sc_bvh_config *cfg)
  * Measured on the shared scenes (docs/compare.md, thirty-first session):
  * 5.3-13.1 on the four where the high build traced incoherent rays 8-37 %
  * faster (Sibenik, featuretype, Sponza, the engine), at most 0.44 on the
- * scanned, terrain and foliage meshes where it gained nothing, and 1.6-1.9
+ * scanned, terrain and foliage meshes where it gained nothing, and 1.6-1.7
  * on the scenes of a mesh on a two-triangle ground plane, whose plane is
  * all they have to split. */
 #define SC_AUTO_LARGE_TRIANGLE 1e-3
