@@ -559,6 +559,130 @@ static void test_streams(void **state)
     tmesh_free(&m);
 }
 
+/* Coherent any-hit streams go four 16-ray packets at a time through the
+ * level's group kernel (any_stream64, traverse_group_any), which walks the
+ * tree once for 64 rays. Shadow-like runs (origins within a small box that
+ * straddles two closed spheres' surfaces, one light) in groups whose
+ * packets share an octant, groups with a packet of another octant (it walks
+ * alone), runs with a parallel lane, tmin 0 and 1e-4, and a tail that is
+ * neither 64 nor 16 rays: on every ISA level, with and without statistics,
+ * every ray gets the scalar single-ray kernel's answer. Called directly, the
+ * group kernel answers the same and visits fewer nodes than its four
+ * packets do one by one (the walk is shared). */
+static void shadow_run(sc_ray *r, sc_rng *g, const double p[3], const double light_in[3], double w, int kind)
+{
+    double light[3] = { light_in[0], light_in[1], light_in[2] };
+    if (kind == 1)       /* the light through the box's other side: another octant */
+        for (int k = 0; k < 3; k++)
+            light[k] = 2 * p[k] - light[k];
+    if (kind == 2)
+        light[0] = p[0];
+    for (int i = 0; i < 16; i++) {
+        double o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            o[k] = p[k] + w * sc_rng_range(g, -1, 1);
+            d[k] = light[k] - o[k];
+        }
+        set_ray(&r[i], o, d, i % 3 ? 1e-4f : 0.0f, 1.0f);
+        if (kind == 2 && i == 5)
+            r[i].dir[0] = 0;   /* a parallel lane */
+    }
+}
+
+static void test_stream_groups(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c0[3] = { 0, 0, 0 }, c1[3] = { 0.9, 0.7, -0.4 };
+    scene_icosphere(&m, 4, 1.0, c0);
+    scene_icosphere(&m, 3, 0.5, c1);
+    enum { RUNS = 16 * 40 + 3 };
+    const size_t n = 16 * RUNS - 5;
+    sc_ray *r = malloc(16 * RUNS * sizeof *r);
+    sc_rng g;
+    sc_rng_seed(&g, 61);
+    double ctr[3] = { 0, 0, 0 }, light[3] = { 0, 0, 0 }, w = 0;
+    for (size_t run = 0; run < RUNS; run++) {
+        /* four neighbouring tiles a group (one light, origins in four
+         * boxes side by side); every fifth group has a packet of another
+         * octant, every seventh run a parallel lane */
+        if (run % 4 == 0) {
+            for (int k = 0; k < 3; k++)
+                ctr[k] = sc_rng_range(&g, -1.6, 1.6), light[k] = sc_rng_range(&g, -1, 1) * 6;
+            w = sc_rng_range(&g, 0.002, 0.1);
+        }
+        const double q[3] = { ctr[0] + 2 * w * (double)(run % 2), ctr[1] + 2 * w * (double)(run / 2 % 2), ctr[2] };
+        shadow_run(r + 16 * run, &g, q, light, w, run % 20 == 17 ? 1 : run % 7 == 3 ? 2 : 0);
+    }
+    int *ref = malloc(n * sizeof *ref);
+    int32_t *occ = malloc(n * sizeof *occ);
+    const sc_isa start = sc_isa_active();
+    assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
+    sc_bvh *bvh = build(&m, 8, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT);
+    size_t occluded = 0;
+    for (size_t i = 0; i < n; i++) {
+        assert_int_equal(sc_trace_any(bvh, &r[i], &ref[i], NULL), SC_OK);
+        occluded += ref[i] != 0;
+    }
+    assert_true(occluded > n / 8 && occluded < n - n / 8);   /* both answers, often within a run */
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        const sc_trace_kernels *k = &sc_kernels_active()->trace[SC_TRI_WATERTIGHT];
+        for (int stats = 0; stats < 2; stats++) {
+            sc_trace_stats st;
+            memset(&st, 0, sizeof st);
+            memset(occ, 0x5a, n * sizeof *occ);
+            assert_int_equal(sc_trace_any_n(bvh, r, sizeof *r, occ, sizeof *occ, n, 0, stats ? &st : NULL), SC_OK);
+            size_t bad = 0;
+            for (size_t i = 0; i < n; i++)
+                bad += occ[i] != ref[i];
+            if (bad)
+                print_message("%s%s: %zu of %zu rays differ from the scalar kernel\n", sc_isa_name((sc_isa)isa),
+                              stats ? " (statistics)" : "", bad, n);
+            assert_int_equal(bad, 0);
+            if (stats)
+                assert_int_equal(st.rays, n);
+        }
+        if (!k->any_stream64)
+            continue;
+        int grouped = 0;
+        /* the group kernel called directly on groups of the stream's
+         * runs: the single rays' answers, and a shared walk on the
+         * groups of one octant */
+        for (size_t run = 0; run + 4 <= RUNS - 1; run += 4) {
+            sc_ray_packet16 p[4] __attribute__((aligned(64)));
+            const uint32_t lanes[4] = { 0xffff, 0xffff, 0xffff, 0xffff };
+            int32_t o64[64];
+            for (int j = 0; j < 4; j++)
+                to_packet16(r + 16 * (run + (size_t)j), &p[j]);
+            sc_trace_stats st, st4;
+            memset(&st, 0, sizeof st), memset(&st4, 0, sizeof st4);
+            k->any_stream64(bvh, p, lanes, o64, &st);
+            for (int j = 0; j < 64; j++)
+                if (o64[j] != ref[16 * run + (size_t)j])
+                    fail_msg("%s group at run %zu, ray %d: %d, the single ray %d", sc_isa_name((sc_isa)isa), run,
+                             j, o64[j], ref[16 * run + (size_t)j]);
+            int32_t o16[16];
+            for (int j = 0; j < 4; j++)
+                assert_int_equal(sc_trace_any16(bvh, (const int32_t[16]){ 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 },
+                                                &p[j], o16, &st4),
+                                 SC_OK);
+            if (st.nodes < st4.nodes)
+                grouped++;
+        }
+        /* most groups share their walk */
+        if (grouped <= (RUNS / 4) / 2)
+            fail_msg("%s: %d of %d groups visit fewer nodes than their packets", sc_isa_name((sc_isa)isa), grouped,
+                     RUNS / 4);
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    sc_bvh_free(bvh);
+    free(r), free(ref), free(occ);
+    tmesh_free(&m);
+}
+
 /* Kinds of ray sc_ray_valid refuses, made from a valid ray (w: which
  * axis, for some kinds): those before BAD_ALWAYS in every MXCSR mode, the
  * subnormal ones only where DAZ reads them as 0. */
@@ -1042,6 +1166,7 @@ int main(void)
         cmocka_unit_test(test_other_tests),
         cmocka_unit_test(test_streams),
         cmocka_unit_test(test_streams_incoherent),
+        cmocka_unit_test(test_stream_groups),
         cmocka_unit_test(test_stream_gather),
         cmocka_unit_test(test_packet_valid),
         cmocka_unit_test(test_icosphere),

@@ -665,7 +665,7 @@ static int stream_ok(const sc_accel *a, const sc_ray *rays, size_t ray_stride, c
 static sc_status accel_stream(const sc_accel *a, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
                               size_t n, sc_trace_stats *st, int any)
 {
-    const sc_stream_target T = { a, a->top.lo, a->top.hi, accel_packet16, accel_single, NULL };
+    const sc_stream_target T = { a, a->top.lo, a->top.hi, accel_packet16, accel_single, NULL, NULL };
     return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, st, any);
 }
 

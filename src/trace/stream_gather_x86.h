@@ -30,10 +30,17 @@ SC_X86_INLINE void transpose8x8(__m256 r[8])
     r[3] = _mm256_permute2f128_ps(s3, s7, 0x20), r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
 }
 
-/* The spread (largest minus smallest lane) of hi's and lo's lanes. */
-SC_X86_INLINE float lanes_spread8(__m256 lo, __m256 hi)
+/* Whether the spread of a bound (the largest of hi's lanes minus the
+ * smallest of lo's) is at most limit, in every lane: each lane compares
+ * fl(hi_i - min lo), and the largest of those is fl(max hi - min lo) since
+ * rounding is monotone, so this is the specification's test without taking
+ * either extreme out to a scalar. */
+SC_X86_INLINE __m256 spread_within8(__m256 lo, __m256 hi, float limit)
 {
-    return -f32x8_hmin(_mm256_sub_ps(_mm256_setzero_ps(), hi)) - f32x8_hmin(lo);
+    lo = _mm256_min_ps(lo, _mm256_permute2f128_ps(lo, lo, 1));
+    lo = _mm256_min_ps(lo, _mm256_shuffle_ps(lo, lo, 0x4e));
+    lo = _mm256_min_ps(lo, _mm256_shuffle_ps(lo, lo, 0xb1));
+    return _mm256_cmp_ps(_mm256_sub_ps(hi, lo), _mm256_set1_ps(limit), _CMP_LE_OQ);
 }
 
 static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const float *lo, const float *hi,
@@ -61,12 +68,13 @@ static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const 
     }
     if (_mm256_movemask_ps(ok) != 0xff)
         return SC_GATHER_REFUSED;
-    int narrow = 1, near = 1;
+    __m256 narrow = _mm256_castsi256_ps(_mm256_set1_epi32(-1)), near = narrow;
     for (int a = 0; a < 3; a++) {
-        narrow &= lanes_spread8(dlo[a], dhi[a]) <= SC_STREAM_SPREAD;
-        near &= lanes_spread8(olo[a], ohi[a]) <= SC_STREAM_ORIGINS * (hi[a] - lo[a]);
+        narrow = _mm256_and_ps(narrow, spread_within8(dlo[a], dhi[a], SC_STREAM_SPREAD));
+        near = _mm256_and_ps(near, spread_within8(olo[a], ohi[a], SC_STREAM_ORIGINS * (hi[a] - lo[a])));
     }
-    return narrow || near ? SC_GATHER_COHERENT : SC_GATHER_INCOHERENT;
+    return _mm256_movemask_ps(narrow) == 0xff || _mm256_movemask_ps(near) == 0xff ? SC_GATHER_COHERENT
+                                                                                 : SC_GATHER_INCOHERENT;
 }
 
 #endif

@@ -222,50 +222,45 @@ static void queue_flush(const sc_stream_target *T, stream_queue *q, int any)
     q->n = 0;
 }
 
-/* Rays [base, base + cnt) (cnt <= 16) as one packet; on a refused ray, one
- * by one (which answers the others), or into the queue q (when the target
- * has a batch kernel and no statistics are asked for). */
-static sc_status stream_packet(const sc_stream_target *T, const char *rays, size_t ray_stride, char *out,
-                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any,
-                               stream_queue *q)
-{
 #define RAY(j) ((const sc_ray *)(const void *)(rays + (base + (j)) * ray_stride))
 #define OUT(j) (out + (base + (j)) * out_stride)
-    sc_ray_packet16 p __attribute__((aligned(64)));
-    uint32_t lanes = 0;
+
+/* Rays [base, base + cnt) (cnt <= 16) into the packet p with its lanes:
+ * 1 if they go as a packet; 0 if they go one by one (the coherence tests
+ * failed, or a ray is refused). */
+static int stream_gather(const sc_stream_target *T, const char *rays, size_t ray_stride, size_t base, unsigned cnt,
+                         sc_ray_packet16 *p, uint32_t *lanes)
+{
     if (cnt == 16) {
         if (pair_incoherent(RAY(0), RAY(15), T->lo, T->hi))
-            goto one_by_one;
+            return 0;
         const int g = sc_kernels_active()->trace[0].stream_gather16(rays + base * ray_stride, ray_stride, T->lo,
-                                                                      T->hi, &p);
+                                                                      T->hi, p);
         if (g != SC_GATHER_COHERENT)
-            goto one_by_one;
-        lanes = 0xffff;
-    } else {
-        /* the tail of the stream; the unused lanes repeat its last ray */
-        for (unsigned i = 0; i < 16; i++) {
-            const sc_ray *r = RAY(i < cnt ? i : cnt - 1);
-            if (i < cnt && !sc_ray_valid(r))
-                goto one_by_one;
-            p.ox[i] = r->org[0], p.oy[i] = r->org[1], p.oz[i] = r->org[2], p.tmin[i] = r->tmin;
-            p.dx[i] = r->dir[0], p.dy[i] = r->dir[1], p.dz[i] = r->dir[2], p.tmax[i] = r->tmax;
-        }
-        lanes = (1u << cnt) - 1;
+            return 0;
+        *lanes = 0xffff;
+        return 1;
     }
-    if (any) {
-        int32_t occ[16];
-        T->packet16(T->obj, lanes, &p, occ, 1, stats);
-        for (unsigned i = 0; i < cnt; i++)
-            memcpy(OUT(i), &occ[i], sizeof occ[i]);
-    } else {
-        sc_hit_packet16 h __attribute__((aligned(64)));
-        T->packet16(T->obj, lanes, &p, &h, 0, stats);
-        hit_rows_to_records(&h, cnt, OUT(0), out_stride);
+    /* the tail of the stream; the unused lanes repeat its last ray */
+    for (unsigned i = 0; i < 16; i++) {
+        const sc_ray *r = RAY(i < cnt ? i : cnt - 1);
+        if (i < cnt && !sc_ray_valid(r))
+            return 0;
+        p->ox[i] = r->org[0], p->oy[i] = r->org[1], p->oz[i] = r->org[2], p->tmin[i] = r->tmin;
+        p->dx[i] = r->dir[0], p->dy[i] = r->dir[1], p->dz[i] = r->dir[2], p->tmax[i] = r->tmax;
     }
-    return SC_OK;
-one_by_one:;
-    /* rays the coherence tests sent alone, or a run with a refused ray
-     * (whose others are answered here) */
+    *lanes = (1u << cnt) - 1;
+    return 1;
+}
+
+/* Rays [base, base + cnt) one by one: rays the coherence tests sent alone,
+ * or a run with a refused ray (whose others are answered here); into the
+ * queue q when the target has a batch kernel and no statistics are asked
+ * for. */
+static sc_status stream_alone(const sc_stream_target *T, const char *rays, size_t ray_stride, char *out,
+                              size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any,
+                              stream_queue *q)
+{
     sc_status status = SC_OK;
     for (unsigned i = 0; i < cnt; i++) {
         if (q && sc_ray_valid(RAY(i))) {
@@ -276,8 +271,50 @@ one_by_one:;
         }
     }
     return status;
+}
+
+/* The packet p (rays [base, base + cnt)) traced, its answers stored. */
+static void stream_packet(const sc_stream_target *T, const sc_ray_packet16 *p, uint32_t lanes, char *out,
+                          size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any)
+{
+    if (any) {
+        int32_t occ[16];
+        T->packet16(T->obj, lanes, p, occ, 1, stats);
+        for (unsigned i = 0; i < cnt; i++)
+            memcpy(OUT(i), &occ[i], sizeof occ[i]);
+    } else {
+        sc_hit_packet16 h __attribute__((aligned(64)));
+        T->packet16(T->obj, lanes, p, &h, 0, stats);
+        hit_rows_to_records(&h, cnt, OUT(0), out_stride);
+    }
+}
 #undef RAY
 #undef OUT
+
+/* Up to four gathered any-hit packets waiting to be traced as a group. */
+typedef struct stream_group {
+    unsigned n;
+    sc_ray_packet16 p[4] __attribute__((aligned(64)));
+    uint32_t lanes[4];
+    size_t base[4];
+    unsigned cnt[4];
+} stream_group;
+
+static void group_flush(const sc_stream_target *T, stream_group *g, char *out, size_t out_stride,
+                        sc_trace_stats *stats)
+{
+    if (g->n == 1) {
+        stream_packet(T, &g->p[0], g->lanes[0], out, out_stride, g->base[0], g->cnt[0], stats, 1);
+    } else if (g->n) {
+        int32_t occ[64];
+        for (unsigned i = g->n; i < 4; i++)
+            g->lanes[i] = 0;
+        T->group64(T->obj, g->p, g->lanes, occ, stats);
+        for (unsigned i = 0; i < g->n; i++)
+            for (unsigned j = 0; j < g->cnt[i]; j++)
+                memcpy(out + (g->base[i] + j) * out_stride, &occ[16 * i + j], sizeof occ[0]);
+    }
+    g->n = 0;
 }
 
 sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ray_stride, void *out,
@@ -286,15 +323,32 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
     sc_status status = SC_OK;
     stream_queue queue, *q = T->batch && !stats ? &queue : NULL;
     queue.n = 0;
+    stream_group group, *grp = any && T->group64 ? &group : NULL;
+    group.n = 0;
     for (size_t base = 0; base < n; base += 16) {
         const unsigned cnt = n - base < 16 ? (unsigned)(n - base) : 16;
-        sc_status st = stream_packet(T, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
-                                     stats, any, q);
-        if (st != SC_OK)
-            status = st;
+        sc_ray_packet16 p __attribute__((aligned(64)));
+        sc_ray_packet16 *pp = grp ? &grp->p[grp->n] : &p;
+        uint32_t lanes;
+        if (stream_gather(T, (const char *)rays, ray_stride, base, cnt, pp, &lanes)) {
+            if (grp) {
+                grp->lanes[grp->n] = lanes, grp->base[grp->n] = base, grp->cnt[grp->n] = cnt;
+                if (++grp->n == 4)
+                    group_flush(T, grp, out, out_stride, stats);
+            } else {
+                stream_packet(T, pp, lanes, out, out_stride, base, cnt, stats, any);
+            }
+        } else {
+            sc_status st = stream_alone(T, (const char *)rays, ray_stride, (char *)out, out_stride, base, cnt,
+                                        stats, any, q);
+            if (st != SC_OK)
+                status = st;
+        }
         if (q && q->n > SC_STREAM_QUEUE - 16)
             queue_flush(T, q, any);
     }
+    if (grp)
+        group_flush(T, grp, out, out_stride, stats);
     if (q)
         queue_flush(T, q, any);
     return status;
@@ -342,6 +396,13 @@ static void bvh_batch(const void *obj, const sc_ray *const *rays, void *const *o
         k->closest_interleaved(bvh, rays, outs, n);
 }
 
+static void bvh_group64(const void *obj, const sc_ray_packet16 *rays, const uint32_t *lanes, int32_t *occluded,
+                        sc_trace_stats *stats)
+{
+    const sc_bvh *bvh = obj;
+    sc_kernels_active()->trace[bvh->cfg.tri_test].any_stream64(bvh, rays, lanes, occluded, stats);
+}
+
 static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
                         size_t n, unsigned flags, sc_trace_stats *stats, int any)
 {
@@ -349,7 +410,8 @@ static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride
         out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || flags != 0)
         return SC_ERR_INVALID_ARGUMENT;
     const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single,
-                                 bvh->interleave ? bvh_batch : NULL };
+                                 bvh->interleave ? bvh_batch : NULL,
+                                 sc_kernels_active()->trace[bvh->cfg.tri_test].any_stream64 ? bvh_group64 : NULL };
     return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, stats, any);
 }
 

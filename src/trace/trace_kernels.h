@@ -53,6 +53,11 @@ typedef struct sc_trace_kernels {
                         sc_trace_stats *st);
     void (*any_p16)(const sc_bvh *bvh, const sc_ray_packet16 *rays, uint32_t lanes, int32_t *occluded,
                     sc_trace_stats *st);
+    /* A stream's 64 coherent rays as four 16-ray packets (lanes[g]: the
+     * valid lanes of packet g, rays checked), walked together
+     * (traverse_group_any); occluded[g * 16 + l]. NULL: packet by packet. */
+    void (*any_stream64)(const sc_bvh *bvh, const sc_ray_packet16 *rays, const uint32_t *lanes, int32_t *occluded,
+                         sc_trace_stats *st);
     /* The top level of a two-level scene (trace_top.h), the same in every
      * row: hit holds a miss on entry. */
     void (*top_closest)(const struct sc_top *top, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st);

@@ -65,11 +65,17 @@ typedef struct sc_stream_target {
     /* Optional (NULL: single, ray by ray): incoherent checked rays
      * rays[0..n) -> outs[i], several at a time, without statistics. */
     void (*batch)(const void *obj, const sc_ray *const *rays, void *const *outs, unsigned n, int any);
+    /* Optional (NULL: packet by packet): any hit for four coherent 16-ray
+     * packets at once (lanes[g]: packet g's checked lanes), answers to
+     * occluded[g * 16 + l]. */
+    void (*group64)(const void *obj, const sc_ray_packet16 *rays, const uint32_t *lanes, int32_t *occluded,
+                    sc_trace_stats *stats);
 } sc_stream_target;
 
 /* n rays at ray_stride; results at out_stride (sc_hitrec, or int32_t for
- * any). Runs of 16 coherent rays as packets, the rest one by one or, when
- * the target has a batch kernel, gathered and traced a batch at a time. The
+ * any). Runs of 16 coherent rays as packets (any hit: four at a time, when
+ * the target has a group kernel), the rest one by one or, when the target
+ * has a batch kernel, gathered and traced a batch at a time. The
  * strides and flags are the caller's to check. */
 sc_status sc_stream_run(const sc_stream_target *t, const sc_ray *rays, size_t ray_stride, void *out,
                         size_t out_stride, size_t n, sc_trace_stats *stats, int any);

@@ -524,6 +524,203 @@ SC_X86_INLINE uint32_t PFN(pk_leaf_lanes)(const pk_ctx *c, const float *rows, un
     return occ;
 }
 
+/* A leaf for lanes *mp of one packet: the cone cull (one origin), then its
+ * triangles, lane by lane when few lanes reach it (pk_leaf_lanes), else one
+ * triangle at a time over the lanes. Any: the lanes found occluded leave
+ * *mp and *alivep; closest: best holds each lane's nearest hit. Shared by
+ * the packet traversal and the stream groups (traverse_group_any). */
+SC_X86_INLINE void PFN(pk_leaf)(const sc_bvh *bvh, const pk_ctx *c, uint64_t ref, uint32_t *mp, uint32_t *alivep,
+                                PFN(pk_best) *bestp, sc_trace_stats *st, const int ANY, const int STATS, const int UNI)
+{
+    uint32_t m = *mp, alive = *alivep;
+    PFN(pk_best) *const best = bestp;
+    const pvec tminv = PV(load)(c->tmin), zero = PV(set1)(0);
+    const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
+    const float *block = sc_leaf_block(bvh->leaves, ref);
+    const float *rows = sc_leaf_rows(block, W, ref);
+    const uint32_t *prims = sc_leaf_prims(rows, W);
+    uint32_t live = (1u << n) - 1;
+    if (STATS)
+        st->leaves++;
+    if (c->cone && (ref & (SC_REF_SPHERES | SC_REF_SUMMARY))) {
+        _Alignas(64) float dec[4 * 16];
+        if (sc_ref_has_summary(ref)) {
+            if (W < PK)   /* the cull reads PK lanes a row: no uninitialised ones */
+                __builtin_memset(dec, 0, sizeof dec);
+            summary_decode(block, W, dec);
+        }
+        uint32_t cull = PFN(pk_cone_cull)(c, sc_ref_has_summary(ref) ? dec : block, W) & live;
+        if (STATS) {
+            /* per ray, as the single-ray counters */
+            const uint64_t rays = (uint64_t)__builtin_popcount(m);
+            st->sphere_tests += n * rays;
+            st->sphere_rejects += (uint64_t)__builtin_popcount(cull) * rays;
+        }
+        live &= ~cull;
+    }
+    if (live && __builtin_popcount(m) <= SC_PACKET_LEAF_LANES) {
+        const uint32_t occ = PFN(pk_leaf_lanes)(c, rows, W, live, m, prims, best, st, ANY, STATS, UNI);
+        if (ANY)
+            alive &= ~occ, m &= ~occ;
+        live = 0;   /* the triangles are done */
+    }
+    /* v - o as (-o) + v: IEEE subtraction is the addition of
+     * the negation, and addition commutes, so the bits are the
+     * single ray's (-o by its sign bit, so a subnormal origin
+     * reads the same under DAZ and flushes the same under FTZ);
+     * with the vertex as the second operand, AVX-512 folds its
+     * broadcast into the addition */
+    const pvec o0 = PV(neg)(PV(load)(c->org[0])), o1 = PV(neg)(PV(load)(c->org[1])),
+               o2 = PV(neg)(PV(load)(c->org[2]));
+    const pvec Sx = PV(load)(c->Sx), Sy = PV(load)(c->Sy), Sz = PV(load)(c->Sz);
+    /* a uniform packet's rows kx, ky, kz of vertex A; B and C
+     * follow at 3W and 6W (sc_leaf_at) */
+    const float *rx = rows + (size_t)(UNI ? c->kx : 0) * W, *ry = rows + (size_t)(UNI ? c->ky : 0) * W,
+                *rz = rows + (size_t)(UNI ? c->kz : 0) * W;
+    const pvec okx = UNI ? (c->kx == 0 ? o0 : c->kx == 1 ? o1 : o2) : o0;
+    const pvec oky = UNI ? (c->ky == 0 ? o0 : c->ky == 1 ? o1 : o2) : o0;
+    const pvec okz = UNI ? (c->kz == 0 ? o0 : c->kz == 1 ? o1 : o2) : o0;
+    /* lanes of other shear axes: each lane's axes, picked once a leaf */
+    const PV(m) mx1 = PV(mask_from_bits)(UNI ? 0 : c->kx1), mx2 = PV(mask_from_bits)(UNI ? 0 : c->kx2);
+    const PV(m) my1 = PV(mask_from_bits)(UNI ? 0 : c->ky1), my2 = PV(mask_from_bits)(UNI ? 0 : c->ky2);
+    const PV(m) mz1 = PV(mask_from_bits)(UNI ? 0 : c->kz1), mz2 = PV(mask_from_bits)(UNI ? 0 : c->kz2);
+    for (; live && m; live &= live - 1) {
+        const unsigned i = (unsigned)__builtin_ctz(live);
+        if (STATS)
+            st->tri_tests += (uint64_t)__builtin_popcount(m);
+#define VTX(j, k) PV(set1)(rows[sc_leaf_at(W, (j), (k), i)])
+        pvec Akz, Bkz, Ckz, Ax, Ay, Bx, By, Cx, Cy;
+        if (UNI) {
+            const size_t ia = i, ib = i + 3 * (size_t)W, ic = i + 6 * (size_t)W;
+            Akz = PV(add)(okz, PV(set1)(rz[ia]));
+            Bkz = PV(add)(okz, PV(set1)(rz[ib]));
+            Ckz = PV(add)(okz, PV(set1)(rz[ic]));
+            Ax = PV(sub)(PV(add)(okx, PV(set1)(rx[ia])), PV(mul)(Sx, Akz));
+            Ay = PV(sub)(PV(add)(oky, PV(set1)(ry[ia])), PV(mul)(Sy, Akz));
+            Bx = PV(sub)(PV(add)(okx, PV(set1)(rx[ib])), PV(mul)(Sx, Bkz));
+            By = PV(sub)(PV(add)(oky, PV(set1)(ry[ib])), PV(mul)(Sy, Bkz));
+            Cx = PV(sub)(PV(add)(okx, PV(set1)(rx[ic])), PV(mul)(Sx, Ckz));
+            Cy = PV(sub)(PV(add)(oky, PV(set1)(ry[ic])), PV(mul)(Sy, Ckz));
+        } else {
+            /* A[k] = v - o for every axis, then the lane's axes */
+            pvec A0 = PV(add)(o0, VTX(0, 0)), A1 = PV(add)(o1, VTX(0, 1)), A2 = PV(add)(o2, VTX(0, 2));
+            pvec B0 = PV(add)(o0, VTX(1, 0)), B1 = PV(add)(o1, VTX(1, 1)), B2 = PV(add)(o2, VTX(1, 2));
+            pvec C0 = PV(add)(o0, VTX(2, 0)), C1 = PV(add)(o1, VTX(2, 1)), C2 = PV(add)(o2, VTX(2, 2));
+#define SEL3(k, a0, a1, a2) PV(sel)(m##k##2, (a2), PV(sel)(m##k##1, (a1), (a0)))
+            Akz = SEL3(z, A0, A1, A2);
+            Bkz = SEL3(z, B0, B1, B2);
+            Ckz = SEL3(z, C0, C1, C2);
+            Ax = PV(sub)(SEL3(x, A0, A1, A2), PV(mul)(Sx, Akz));
+            Ay = PV(sub)(SEL3(y, A0, A1, A2), PV(mul)(Sy, Akz));
+            Bx = PV(sub)(SEL3(x, B0, B1, B2), PV(mul)(Sx, Bkz));
+            By = PV(sub)(SEL3(y, B0, B1, B2), PV(mul)(Sy, Bkz));
+            Cx = PV(sub)(SEL3(x, C0, C1, C2), PV(mul)(Sx, Ckz));
+            Cy = PV(sub)(SEL3(y, C0, C1, C2), PV(mul)(Sy, Ckz));
+#undef SEL3
+        }
+#undef VTX
+        const pvec U = PV(sub)(PV(mul)(Cx, By), PV(mul)(Cy, Bx));
+        const pvec V = PV(sub)(PV(mul)(Ax, Cy), PV(mul)(Ay, Cx));
+        const pvec Wv = PV(sub)(PV(mul)(Bx, Ay), PV(mul)(By, Ax));
+        /* edge functions of both signs: a miss. As the smallest
+         * below zero and the largest above, which differs from
+         * the three-way sign test only in lanes with a NaN edge
+         * function, whose det and t are NaN, so never a hit. */
+        const pvec emin = PV(min)(PV(min)(U, V), Wv), emax = PV(max)(PV(max)(U, V), Wv);
+        const PV(m) zm = PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero));
+        const pvec det = PV(add)(PV(add)(U, V), Wv);
+        /* not candidates: both signs, det = 0, or an edge function
+         * exactly 0 (those lanes: zr, the double test below) */
+        const PV(m) out = PV(or)(PV(or)(PV(and)(PV(lt)(emin, zero), PV(gt)(emax, zero)), PV(eq)(det, zero)), zm);
+        uint32_t zr = PV(bits)(zm) & m;
+        const uint32_t cand = ~PV(bits)(out) & m;
+        uint32_t h = 0;
+        pvec tt = zero;
+        if (cand) {
+            const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
+            pvec T = PV(add)(PV(add)(PV(mul)(U, Az), PV(mul)(V, Bz)), PV(mul)(Wv, Cz));
+            tt = PV(div)(T, det);
+            h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, best->t))) & cand;
+        }
+        if (h) {
+            if (STATS)
+                st->tri_hits += (uint64_t)__builtin_popcount(h);
+            if (ANY) {
+                alive &= ~h;
+                m &= ~h;
+            } else {
+                /* of equal t the smaller primitive id */
+                uint32_t upd = h & PV(bits)(PV(lt)(tt, best->t));
+                if (h & ~upd) {
+                    uint32_t bprim[PK];
+                    PV(store)((float *)(void *)bprim, best->prim);
+                    for (uint32_t e = h & ~upd; e; e &= e - 1) {
+                        unsigned l = (unsigned)__builtin_ctz(e);
+                        if (prims[i] < bprim[l])
+                            upd |= 1u << l;
+                    }
+                }
+                if (upd) {
+                    const PV(m) um = PV(mask_from_bits)(upd);
+                    float ng[3];
+                    sc_leaf_normal(rows, W, i, ng);
+                    best->t = PV(sel)(um, tt, best->t);
+                    best->un = PV(sel)(um, V, best->un);
+                    best->vn = PV(sel)(um, Wv, best->vn);
+                    best->den = PV(sel)(um, det, best->den);
+                    best->prim = PV(sel)(um, PV(set1_bits)(prims[i]), best->prim);
+                    for (int k = 0; k < 3; k++)
+                        best->ng[k] = PV(sel)(um, PV(set1)(ng[k]), best->ng[k]);
+                    best->got |= upd;
+                }
+            }
+        }
+        if (__builtin_expect(zr != 0, 0)) {
+            /* Two equal sheared vertices (a triangle with a repeated
+             * vertex, or an edge seen end-on) make one edge function
+             * zero and the other two exact negatives, in float and
+             * in sc_watertight_double alike, so det is exactly 0
+             * there and the double test rejects: skip those lanes.
+             * CAD meshes have such triangles, and every ray that
+             * reaches one would take the double path. */
+            const PV(m) dab = PV(and)(PV(eq)(Ax, Bx), PV(eq)(Ay, By));
+            const PV(m) dbc = PV(and)(PV(eq)(Bx, Cx), PV(eq)(By, Cy));
+            const PV(m) dac = PV(and)(PV(eq)(Ax, Cx), PV(eq)(Ay, Cy));
+            zr &= ~PV(bits)(PV(or)(PV(or)(dab, dbc), dac));
+        }
+        if (__builtin_expect(zr != 0, 0)) {
+            /* an exactly zero edge function: sc_watertight_double
+             * per lane, as the single ray does */
+            float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
+            PFN(pk_best_lanes) a;
+            PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
+            PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, PV(mul)(Sz, Akz));
+            PV(store)(bz, PV(mul)(Sz, Bkz)), PV(store)(cz, PV(mul)(Sz, Ckz));
+            PFN(pk_best_spill)(best, &a);
+            for (uint32_t e = zr; e; e &= e - 1) {
+                unsigned l = (unsigned)__builtin_ctz(e);
+                float t, u, v;
+                if (!sc_watertight_double(ax[l], ay[l], bx[l], by[l], cx[l], cy[l], az[l], bz[l],
+                                          cz[l], c->tmin[l], a.t[l], &t, &u, &v))
+                    continue;
+                if (STATS)
+                    st->tri_hits++;
+                if (ANY) {
+                    alive &= ~(1u << l);
+                    m &= ~(1u << l);
+                } else {
+                    float ng[3];
+                    sc_leaf_normal(rows, W, i, ng);
+                    PFN(pk_best_offer)(best, &a, l, t, u, v, prims[i], ng);
+                }
+            }
+            if (!ANY)
+                PFN(pk_best_fill)(best, &a);
+        }
+    }
+    *mp = m, *alivep = alive;
+}
+
 /* The traversal. UNI = 1: every lane has the packet's octant and shear axes
  * (the near planes and the sheared axes are the same rows for all lanes). */
 SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
@@ -652,193 +849,9 @@ SC_X86_INLINE void PFN(traverse_packet)(const sc_bvh *bvh, const PKT *r, uint32_
             ref = hr[0];
             m = hmk[0];
         }
-        {
-            const unsigned n = sc_ref_count(ref), W = sc_leaf_width(n);
-            const float *block = sc_leaf_block(bvh->leaves, ref);
-            const float *rows = sc_leaf_rows(block, W, ref);
-            const uint32_t *prims = sc_leaf_prims(rows, W);
-            uint32_t live = (1u << n) - 1;
-            if (STATS)
-                st->leaves++;
-            if (c->cone && (ref & (SC_REF_SPHERES | SC_REF_SUMMARY))) {
-                _Alignas(64) float dec[4 * 16];
-                if (sc_ref_has_summary(ref)) {
-                    if (W < PK)   /* the cull reads PK lanes a row: no uninitialised ones */
-                        __builtin_memset(dec, 0, sizeof dec);
-                    summary_decode(block, W, dec);
-                }
-                uint32_t cull = PFN(pk_cone_cull)(c, sc_ref_has_summary(ref) ? dec : block, W) & live;
-                if (STATS) {
-                    /* per ray, as the single-ray counters */
-                    const uint64_t rays = (uint64_t)__builtin_popcount(m);
-                    st->sphere_tests += n * rays;
-                    st->sphere_rejects += (uint64_t)__builtin_popcount(cull) * rays;
-                }
-                live &= ~cull;
-            }
-            if (live && __builtin_popcount(m) <= SC_PACKET_LEAF_LANES) {
-                const uint32_t occ = PFN(pk_leaf_lanes)(c, rows, W, live, m, prims, &best, st, ANY, STATS, UNI);
-                if (ANY)
-                    alive &= ~occ, m &= ~occ;
-                live = 0;   /* the triangles are done */
-            }
-            /* v - o as (-o) + v: IEEE subtraction is the addition of
-             * the negation, and addition commutes, so the bits are the
-             * single ray's (-o by its sign bit, so a subnormal origin
-             * reads the same under DAZ and flushes the same under FTZ);
-             * with the vertex as the second operand, AVX-512 folds its
-             * broadcast into the addition */
-            const pvec o0 = PV(neg)(PV(load)(c->org[0])), o1 = PV(neg)(PV(load)(c->org[1])),
-                       o2 = PV(neg)(PV(load)(c->org[2]));
-            const pvec Sx = PV(load)(c->Sx), Sy = PV(load)(c->Sy), Sz = PV(load)(c->Sz);
-            /* a uniform packet's rows kx, ky, kz of vertex A; B and C
-             * follow at 3W and 6W (sc_leaf_at) */
-            const float *rx = rows + (size_t)(UNI ? c->kx : 0) * W, *ry = rows + (size_t)(UNI ? c->ky : 0) * W,
-                        *rz = rows + (size_t)(UNI ? c->kz : 0) * W;
-            const pvec okx = UNI ? (c->kx == 0 ? o0 : c->kx == 1 ? o1 : o2) : o0;
-            const pvec oky = UNI ? (c->ky == 0 ? o0 : c->ky == 1 ? o1 : o2) : o0;
-            const pvec okz = UNI ? (c->kz == 0 ? o0 : c->kz == 1 ? o1 : o2) : o0;
-            /* lanes of other shear axes: each lane's axes, picked once a leaf */
-            const PV(m) mx1 = PV(mask_from_bits)(UNI ? 0 : c->kx1), mx2 = PV(mask_from_bits)(UNI ? 0 : c->kx2);
-            const PV(m) my1 = PV(mask_from_bits)(UNI ? 0 : c->ky1), my2 = PV(mask_from_bits)(UNI ? 0 : c->ky2);
-            const PV(m) mz1 = PV(mask_from_bits)(UNI ? 0 : c->kz1), mz2 = PV(mask_from_bits)(UNI ? 0 : c->kz2);
-            for (; live && m; live &= live - 1) {
-                const unsigned i = (unsigned)__builtin_ctz(live);
-                if (STATS)
-                    st->tri_tests += (uint64_t)__builtin_popcount(m);
-#define VTX(j, k) PV(set1)(rows[sc_leaf_at(W, (j), (k), i)])
-                pvec Akz, Bkz, Ckz, Ax, Ay, Bx, By, Cx, Cy;
-                if (UNI) {
-                    const size_t ia = i, ib = i + 3 * (size_t)W, ic = i + 6 * (size_t)W;
-                    Akz = PV(add)(okz, PV(set1)(rz[ia]));
-                    Bkz = PV(add)(okz, PV(set1)(rz[ib]));
-                    Ckz = PV(add)(okz, PV(set1)(rz[ic]));
-                    Ax = PV(sub)(PV(add)(okx, PV(set1)(rx[ia])), PV(mul)(Sx, Akz));
-                    Ay = PV(sub)(PV(add)(oky, PV(set1)(ry[ia])), PV(mul)(Sy, Akz));
-                    Bx = PV(sub)(PV(add)(okx, PV(set1)(rx[ib])), PV(mul)(Sx, Bkz));
-                    By = PV(sub)(PV(add)(oky, PV(set1)(ry[ib])), PV(mul)(Sy, Bkz));
-                    Cx = PV(sub)(PV(add)(okx, PV(set1)(rx[ic])), PV(mul)(Sx, Ckz));
-                    Cy = PV(sub)(PV(add)(oky, PV(set1)(ry[ic])), PV(mul)(Sy, Ckz));
-                } else {
-                    /* A[k] = v - o for every axis, then the lane's axes */
-                    pvec A0 = PV(add)(o0, VTX(0, 0)), A1 = PV(add)(o1, VTX(0, 1)), A2 = PV(add)(o2, VTX(0, 2));
-                    pvec B0 = PV(add)(o0, VTX(1, 0)), B1 = PV(add)(o1, VTX(1, 1)), B2 = PV(add)(o2, VTX(1, 2));
-                    pvec C0 = PV(add)(o0, VTX(2, 0)), C1 = PV(add)(o1, VTX(2, 1)), C2 = PV(add)(o2, VTX(2, 2));
-#define SEL3(k, a0, a1, a2) PV(sel)(m##k##2, (a2), PV(sel)(m##k##1, (a1), (a0)))
-                    Akz = SEL3(z, A0, A1, A2);
-                    Bkz = SEL3(z, B0, B1, B2);
-                    Ckz = SEL3(z, C0, C1, C2);
-                    Ax = PV(sub)(SEL3(x, A0, A1, A2), PV(mul)(Sx, Akz));
-                    Ay = PV(sub)(SEL3(y, A0, A1, A2), PV(mul)(Sy, Akz));
-                    Bx = PV(sub)(SEL3(x, B0, B1, B2), PV(mul)(Sx, Bkz));
-                    By = PV(sub)(SEL3(y, B0, B1, B2), PV(mul)(Sy, Bkz));
-                    Cx = PV(sub)(SEL3(x, C0, C1, C2), PV(mul)(Sx, Ckz));
-                    Cy = PV(sub)(SEL3(y, C0, C1, C2), PV(mul)(Sy, Ckz));
-#undef SEL3
-                }
-#undef VTX
-                const pvec U = PV(sub)(PV(mul)(Cx, By), PV(mul)(Cy, Bx));
-                const pvec V = PV(sub)(PV(mul)(Ax, Cy), PV(mul)(Ay, Cx));
-                const pvec Wv = PV(sub)(PV(mul)(Bx, Ay), PV(mul)(By, Ax));
-                /* edge functions of both signs: a miss. As the smallest
-                 * below zero and the largest above, which differs from
-                 * the three-way sign test only in lanes with a NaN edge
-                 * function, whose det and t are NaN, so never a hit. */
-                const pvec emin = PV(min)(PV(min)(U, V), Wv), emax = PV(max)(PV(max)(U, V), Wv);
-                const PV(m) zm = PV(or)(PV(or)(PV(eq)(U, zero), PV(eq)(V, zero)), PV(eq)(Wv, zero));
-                const pvec det = PV(add)(PV(add)(U, V), Wv);
-                /* not candidates: both signs, det = 0, or an edge function
-                 * exactly 0 (those lanes: zr, the double test below) */
-                const PV(m) out = PV(or)(PV(or)(PV(and)(PV(lt)(emin, zero), PV(gt)(emax, zero)), PV(eq)(det, zero)), zm);
-                uint32_t zr = PV(bits)(zm) & m;
-                const uint32_t cand = ~PV(bits)(out) & m;
-                uint32_t h = 0;
-                pvec tt = zero;
-                if (cand) {
-                    const pvec Az = PV(mul)(Sz, Akz), Bz = PV(mul)(Sz, Bkz), Cz = PV(mul)(Sz, Ckz);
-                    pvec T = PV(add)(PV(add)(PV(mul)(U, Az), PV(mul)(V, Bz)), PV(mul)(Wv, Cz));
-                    tt = PV(div)(T, det);
-                    h = PV(bits)(PV(and)(PV(ge)(tt, tminv), PV(le)(tt, best.t))) & cand;
-                }
-                if (h) {
-                    if (STATS)
-                        st->tri_hits += (uint64_t)__builtin_popcount(h);
-                    if (ANY) {
-                        alive &= ~h;
-                        m &= ~h;
-                    } else {
-                        /* of equal t the smaller primitive id */
-                        uint32_t upd = h & PV(bits)(PV(lt)(tt, best.t));
-                        if (h & ~upd) {
-                            uint32_t bprim[PK];
-                            PV(store)((float *)(void *)bprim, best.prim);
-                            for (uint32_t e = h & ~upd; e; e &= e - 1) {
-                                unsigned l = (unsigned)__builtin_ctz(e);
-                                if (prims[i] < bprim[l])
-                                    upd |= 1u << l;
-                            }
-                        }
-                        if (upd) {
-                            const PV(m) um = PV(mask_from_bits)(upd);
-                            float ng[3];
-                            sc_leaf_normal(rows, W, i, ng);
-                            best.t = PV(sel)(um, tt, best.t);
-                            best.un = PV(sel)(um, V, best.un);
-                            best.vn = PV(sel)(um, Wv, best.vn);
-                            best.den = PV(sel)(um, det, best.den);
-                            best.prim = PV(sel)(um, PV(set1_bits)(prims[i]), best.prim);
-                            for (int k = 0; k < 3; k++)
-                                best.ng[k] = PV(sel)(um, PV(set1)(ng[k]), best.ng[k]);
-                            best.got |= upd;
-                        }
-                    }
-                }
-                if (__builtin_expect(zr != 0, 0)) {
-                    /* Two equal sheared vertices (a triangle with a repeated
-                     * vertex, or an edge seen end-on) make one edge function
-                     * zero and the other two exact negatives, in float and
-                     * in sc_watertight_double alike, so det is exactly 0
-                     * there and the double test rejects: skip those lanes.
-                     * CAD meshes have such triangles, and every ray that
-                     * reaches one would take the double path. */
-                    const PV(m) dab = PV(and)(PV(eq)(Ax, Bx), PV(eq)(Ay, By));
-                    const PV(m) dbc = PV(and)(PV(eq)(Bx, Cx), PV(eq)(By, Cy));
-                    const PV(m) dac = PV(and)(PV(eq)(Ax, Cx), PV(eq)(Ay, Cy));
-                    zr &= ~PV(bits)(PV(or)(PV(or)(dab, dbc), dac));
-                }
-                if (__builtin_expect(zr != 0, 0)) {
-                    /* an exactly zero edge function: sc_watertight_double
-                     * per lane, as the single ray does */
-                    float ax[PK], ay[PK], bx[PK], by[PK], cx[PK], cy[PK], az[PK], bz[PK], cz[PK];
-                    PFN(pk_best_lanes) a;
-                    PV(store)(ax, Ax), PV(store)(ay, Ay), PV(store)(bx, Bx), PV(store)(by, By);
-                    PV(store)(cx, Cx), PV(store)(cy, Cy), PV(store)(az, PV(mul)(Sz, Akz));
-                    PV(store)(bz, PV(mul)(Sz, Bkz)), PV(store)(cz, PV(mul)(Sz, Ckz));
-                    PFN(pk_best_spill)(&best, &a);
-                    for (uint32_t e = zr; e; e &= e - 1) {
-                        unsigned l = (unsigned)__builtin_ctz(e);
-                        float t, u, v;
-                        if (!sc_watertight_double(ax[l], ay[l], bx[l], by[l], cx[l], cy[l], az[l], bz[l],
-                                                  cz[l], c->tmin[l], a.t[l], &t, &u, &v))
-                            continue;
-                        if (STATS)
-                            st->tri_hits++;
-                        if (ANY) {
-                            alive &= ~(1u << l);
-                            m &= ~(1u << l);
-                        } else {
-                            float ng[3];
-                            sc_leaf_normal(rows, W, i, ng);
-                            PFN(pk_best_offer)(&best, &a, l, t, u, v, prims[i], ng);
-                        }
-                    }
-                    if (!ANY)
-                        PFN(pk_best_fill)(&best, &a);
-                }
-            }
-            if (UNI && !ANY)
-                tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(zero, best.t), inf));
-        }
+        PFN(pk_leaf)(bvh, c, ref, &m, &alive, &best, st, ANY, STATS, UNI);
+        if (UNI && !ANY)
+            tmax_hi = -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes), PV(sub)(zero, best.t), inf));
     pop:
         do {
             if (sp == 0)
@@ -875,6 +888,227 @@ done:
         OUT(inst, invalid);
 #undef OUT
     }
+}
+
+/* ---- a stream's group of packets, any hit ----------------------------------
+ * SC_GROUP packets (64 rays) of one octant walk the tree together, as
+ * Embree's coherent stream traverser does: a node is fetched, tested
+ * against the group's frustum and pushed once per 64 rays instead of once
+ * per packet. The children the frustum keeps get every traced lane's own
+ * box test (the single ray's, node_bvh8_slab.h), so a lane only enters the
+ * boxes it passes itself and tests the triangles of those leaves, as in
+ * the packet traversal. (Embree's way, children the group's first ray
+ * enters taking the whole lane mask without a test per lane, measured the
+ * same on shadow streams here, and worse when leaves took it too:
+ * docs/compare.md, thirty-second session.)
+ *
+ * Exactness: a lane is occluded when one of the triangles it tests hits it
+ * within [tmin, tmax], with the packet's triangle test, which computes the
+ * single ray's bits; it tests every triangle its own single-ray walk would
+ * reach, so its answer is the single ray's. */
+#define SC_GROUP (64 / PK)
+#if SC_GROUP * PK != 64
+#error "a stream group holds 64 rays"
+#endif
+
+typedef struct {
+    uint64_t ref;
+    uint64_t mask;
+} PFN(group_entry);
+
+/* Lanes m (bit g * PK + l: lane l of packet g) of the group against child k
+ * of node: each packet's lanes with the single ray's box test (rows nr*,
+ * fr*: the group's near and far planes). */
+SC_X86_INLINE uint64_t PFN(group_child_lanes)(const pk_ctx *c, const sc_bvh_node8 *node, int k, uint64_t m,
+                                              int nr0, int nr1, int nr2, int fr0, int fr1, int fr2)
+{
+    const pvec nx = PV(set1)(node->b[nr0][k]), fx = PV(set1)(node->b[fr0][k]);
+    const pvec ny = PV(set1)(node->b[nr1][k]), fy = PV(set1)(node->b[fr1][k]);
+    const pvec nz = PV(set1)(node->b[nr2][k]), fz = PV(set1)(node->b[fr2][k]);
+    uint64_t out = 0;
+    for (unsigned g = 0; g < SC_GROUP; g++) {
+        const uint32_t mg = (uint32_t)(m >> (g * PK)) & (PK == 16 ? 0xffffu : 0xffu);
+        if (!mg)
+            continue;
+        const pk_ctx *cg = &c[g];
+        const pvec tn = PV(max)(PV(max)(PV(fmsub)(nx, PV(load)(cg->rd[0]), PV(load)(cg->ordn[0])),
+                                        PV(fmsub)(ny, PV(load)(cg->rd[1]), PV(load)(cg->ordn[1]))),
+                                PV(max)(PV(fmsub)(nz, PV(load)(cg->rd[2]), PV(load)(cg->ordn[2])),
+                                        PV(load)(cg->tmin)));
+        const pvec tf = PV(min)(PV(min)(PV(fmsub)(fx, PV(load)(cg->rd[0]), PV(load)(cg->ordf[0])),
+                                        PV(fmsub)(fy, PV(load)(cg->rd[1]), PV(load)(cg->ordf[1]))),
+                                PV(min)(PV(fmsub)(fz, PV(load)(cg->rd[2]), PV(load)(cg->ordf[2])),
+                                        PV(load)(cg->tmax)));
+        out |= (uint64_t)(PV(bits)(PV(le)(tn, tf)) & mg) << (g * PK);
+    }
+    return out;
+}
+
+/* The walk of a group whose packets (lanes[g]: the traced lanes of packet
+ * g, parallel lanes removed) are uniform (pk_init) and in octant oct; their
+ * shear axes may differ from packet to packet (each leaf test reads its
+ * packet's own).
+ * occluded: SC_GROUP * PK entries, lane g * PK + l for lane l of packet g. */
+SC_X86_INLINE void PFN(traverse_group_any)(const sc_bvh *bvh, const PKT *r, const uint32_t *lanes,
+                                           int32_t *occluded, const pk_ctx *c, int oct, sc_trace_stats *st,
+                                           const int STATS)
+{
+    const uint64_t lmask = PK == 16 ? 0xffffu : 0xffu;
+    /* the group's frustum: the union of the packets' (pk_frustum_node
+     * reads only these fields) */
+    pk_ctx fc;
+    uint64_t all = 0;
+    float tmax_hi = -INFINITY;
+    PFN(pk_best) best[SC_GROUP];
+    for (int k = 0; k < 3; k++)
+        fc.fr_rdmin[k] = fc.fr_ofmin[k] = INFINITY, fc.fr_rdmax[k] = fc.fr_onmax[k] = -INFINITY;
+    fc.fr_tmin = INFINITY;
+    for (unsigned g = 0; g < SC_GROUP; g++) {
+        if (!lanes[g])
+            continue;
+        best[g].t = PV(load)(c[g].tmax);
+        all |= (uint64_t)lanes[g] << (g * PK);
+        const pvec inf = PV(set1)(INFINITY);
+        tmax_hi = sc_fmax(tmax_hi, -PV(hmin)(PV(sel)(PV(mask_from_bits)(lanes[g]), PV(neg)(best[g].t), inf)));
+        for (int k = 0; k < 3; k++) {
+            fc.fr_rdmin[k] = sc_fmin(fc.fr_rdmin[k], c[g].fr_rdmin[k]);
+            fc.fr_rdmax[k] = sc_fmax(fc.fr_rdmax[k], c[g].fr_rdmax[k]);
+            fc.fr_onmax[k] = sc_fmax(fc.fr_onmax[k], c[g].fr_onmax[k]);
+            fc.fr_ofmin[k] = sc_fmin(fc.fr_ofmin[k], c[g].fr_ofmin[k]);
+        }
+        fc.fr_tmin = sc_fmin(fc.fr_tmin, c[g].fr_tmin);
+    }
+    if (STATS)
+        st->rays += (uint64_t)__builtin_popcountll(all);
+    uint64_t alive = all;
+    if (!bvh->has_root || !all)
+        goto done;
+    const int nr0 = (oct & 1), nr1 = 2 + ((oct >> 1) & 1), nr2 = 4 + ((oct >> 2) & 1);
+    const int fr0 = 1 - (oct & 1), fr1 = 3 - ((oct >> 1) & 1), fr2 = 5 - ((oct >> 2) & 1);
+    PFN(group_entry) stack[SC_TRACE_STACK];
+    int sp = 0;
+    uint64_t ref = 0, m = all;
+    for (;;) {
+        while (!sc_ref_is_leaf(ref)) {
+            if (__builtin_popcountll(m) <= SC_PACKET_THIN) {
+                /* a thin group: its lanes finish this subtree as single rays */
+                for (unsigned g = 0; g < SC_GROUP; g++) {
+                    uint32_t mg = (uint32_t)(m >> (g * PK)) & (uint32_t)lmask, ag = mg;
+                    if (!mg)
+                        continue;
+                    PFN(pk_single)(bvh, &r[g], ref, mg, &best[g], &ag, st, 1, STATS);
+                    alive &= ~((uint64_t)(mg & ~ag) << (g * PK));
+                }
+                goto pop;
+            }
+            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+            if (STATS)
+                st->nodes++;
+            float fdist[SC_BVH_N] __attribute__((aligned(32)));
+            unsigned cand = PFN(pk_frustum_node)(&fc, node, nr0, nr1, nr2, fr0, fr1, fr2, tmax_hi, fdist);
+            if (!cand)
+                goto pop;
+            uint64_t hr[SC_BVH_N], hmk[SC_BVH_N];
+            int cnt = 0;
+            for (; cand; cand &= cand - 1) {
+                const int k = __builtin_ctz(cand);
+                const uint64_t child = node->child[k];
+                if (!child)
+                    continue;
+                const uint64_t mk = PFN(group_child_lanes)(c, node, k, m, nr0, nr1, nr2, fr0, fr1, fr2);
+                if (!mk)
+                    continue;
+                hr[cnt] = child;
+                hmk[cnt] = mk;
+                cnt++;
+            }
+            if (cnt == 0)
+                goto pop;
+            /* the first slot first, as the packets' any-hit walk goes */
+            for (int i = cnt - 1; i > 0; i--) {
+                if (bvh->prefetch == SC_PREFETCH_ALL)
+                    sc_prefetch_ref(bvh, hr[i]);
+                stack[sp].ref = hr[i];
+                stack[sp].mask = hmk[i];
+                sp++;
+            }
+            ref = hr[0];
+            m = hmk[0];
+        }
+        for (unsigned g = 0; g < SC_GROUP; g++) {
+            uint32_t mg = (uint32_t)(m >> (g * PK)) & (uint32_t)lmask, ag = mg;
+            if (!mg)
+                continue;
+            PFN(pk_leaf)(bvh, &c[g], ref, &mg, &ag, &best[g], st, 1, STATS, 1);
+            alive &= ~((uint64_t)((uint32_t)(m >> (g * PK)) & (uint32_t)lmask & ~ag) << (g * PK));
+        }
+    pop:
+        do {
+            if (sp == 0)
+                goto done;
+            sp--;
+            m = stack[sp].mask & alive;
+        } while (!m);
+        ref = stack[sp].ref;
+    }
+done:
+    for (unsigned g = 0; g < SC_GROUP; g++)
+        for (uint32_t e = lanes[g]; e; e &= e - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            occluded[g * PK + l] = !((alive >> (g * PK + l)) & 1);
+        }
+}
+
+/* Any hit for a stream's group: packets r[0..SC_GROUP) with their valid
+ * lanes (checked rays), answers to occluded[g * PK + l]. Packets that are
+ * not uniform, or not in the first uniform packet's octant, walk
+ * alone (traverse_packet), and parallel lanes go as single rays, as in
+ * packet_entry. */
+SC_X86_INLINE void PFN(group_entry_any)(const sc_bvh *bvh, const PKT *r, const uint32_t *lanes, int32_t *occluded,
+                                        sc_trace_stats *st)
+{
+    pk_ctx c[SC_GROUP];
+    uint32_t par[SC_GROUP], together[SC_GROUP], n_together = 0;
+    int lead = -1;
+    for (unsigned g = 0; g < SC_GROUP; g++) {
+        par[g] = lanes[g] ? PFN(pk_init)(&c[g], bvh, &r[g], lanes[g], bvh->cfg.prefilter != SC_PREFILTER_OFF) : 0;
+        together[g] = 0;
+        const uint32_t pl = lanes[g] & ~par[g];
+        if (!pl)
+            continue;
+        if (c[g].uniform && (lead < 0 || c[g].oct == c[lead].oct)) {
+            if (lead < 0)
+                lead = (int)g;
+            together[g] = pl;
+            n_together++;
+        } else if (st) {
+            c[g].uniform ? PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], st, 1, 1, 1)
+                         : PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], st, 1, 1, 0);
+        } else {
+            c[g].uniform ? PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], NULL, 1, 0, 1)
+                         : PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], NULL, 1, 0, 0);
+        }
+    }
+    if (n_together == 1) {
+        /* one packet: its own walk, with its own (tighter) frustum */
+        const unsigned g = (unsigned)lead;
+        if (st)
+            PFN(traverse_packet)(bvh, &r[g], together[g], NULL, occluded + g * PK, &c[g], st, 1, 1, 1);
+        else
+            PFN(traverse_packet)(bvh, &r[g], together[g], NULL, occluded + g * PK, &c[g], NULL, 1, 0, 1);
+    } else if (n_together > 1) {
+        if (st)
+            PFN(traverse_group_any)(bvh, r, together, occluded, c, c[lead].oct, st, 1);
+        else
+            PFN(traverse_group_any)(bvh, r, together, occluded, c, c[lead].oct, NULL, 0);
+    }
+    for (unsigned g = 0; g < SC_GROUP; g++)
+        for (uint32_t e = par[g]; e; e &= e - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(e);
+            const sc_ray ray = { { r[g].ox[l], r[g].oy[l], r[g].oz[l] }, r[g].tmin[l],
+                                 { r[g].dx[l], r[g].dy[l], r[g].dz[l] }, r[g].tmax[l] };
+            occluded[g * PK + l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
+        }
 }
 
 /* The packet entry points: lanes = the caller's valid lanes (rays already
@@ -923,8 +1157,34 @@ static SC_TARGET void PFN(any_packet)(const sc_bvh *bvh, const PKT *r, uint32_t 
     PFN(packet_entry)(bvh, r, lanes, NULL, occluded, st, 1);
 }
 
+#if PK == 16 || !SC_X86_AVX512   /* the level's table takes its widest */
+/* A stream's group as four 16-ray packets (the stream gathers runs of 16);
+ * occluded[g * 16 + l] for lane l of packet g. With 8 lanes a vector, each
+ * packet is two of 8 (the rows copied half by half). */
+static SC_TARGET void PFN(any_stream64_p)(const sc_bvh *bvh, const sc_ray_packet16 *r16, const uint32_t *lanes16,
+                                          int32_t *occluded, sc_trace_stats *st)
+{
+#if PK == 16
+    PFN(group_entry_any)(bvh, r16, lanes16, occluded, st);
+#else
+    sc_ray_packet8 r[8];
+    uint32_t lanes[8];
+    for (unsigned g = 0; g < 4; g++)
+        for (unsigned h = 0; h < 2; h++) {
+            const float *src = r16[g].ox;
+            float *dst = r[2 * g + h].ox;
+            for (unsigned k = 0; k < 8; k++)
+                _mm256_store_ps(dst + 8 * k, _mm256_load_ps(src + 16 * k + 8 * h));
+            lanes[2 * g + h] = (lanes16[g] >> (8 * h)) & 0xffu;
+        }
+    PFN(group_entry_any)(bvh, r, lanes, occluded, st);
+#endif
+}
+#endif
+
 #undef pvec
 #undef pk_ctx
+#undef SC_GROUP
 #undef PCAT_
 #undef PCAT
 #undef PV

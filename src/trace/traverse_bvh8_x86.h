@@ -131,9 +131,10 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
 #if SC_X86_AVX512
 #define SC_TRACE_PACKETS_WATERTIGHT                                                                   \
     , .closest_p8 = closest_packet8, .any_p8 = any_packet8, .closest_p16 = closest_packet16,           \
-    .any_p16 = any_packet16
+    .any_p16 = any_packet16, .any_stream64 = any_stream64_p16
 #else
-#define SC_TRACE_PACKETS_WATERTIGHT , .closest_p8 = closest_packet8, .any_p8 = any_packet8
+#define SC_TRACE_PACKETS_WATERTIGHT                                                                   \
+    , .closest_p8 = closest_packet8, .any_p8 = any_packet8, .any_stream64 = any_stream64_p8
 #endif
 #if SC_X86_AVX512
 /* sc_order_children with three or more hit children as a sorting network
