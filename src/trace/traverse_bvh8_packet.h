@@ -890,6 +890,42 @@ done:
     }
 }
 
+/* Lanes pl of a set-up packet (pk_init) walk the tree as a packet: the
+ * body for a uniform packet where c says it is one, with or without
+ * statistics. */
+SC_X86_INLINE void PFN(pk_walk)(const sc_bvh *bvh, const PKT *r, uint32_t pl, HITP *hit, int32_t *occluded,
+                                const pk_ctx *c, sc_trace_stats *st, const int ANY)
+{
+    if (st)
+        c->uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, c, st, ANY, 1, 1)
+                   : PFN(traverse_packet)(bvh, r, pl, hit, occluded, c, st, ANY, 1, 0);
+    else
+        c->uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, c, NULL, ANY, 0, 1)
+                   : PFN(traverse_packet)(bvh, r, pl, hit, occluded, c, NULL, ANY, 0, 0);
+}
+
+/* Lanes par (parallel rays, which pk_init leaves out) as single rays. */
+SC_X86_INLINE void PFN(pk_parallel)(const sc_bvh *bvh, const PKT *r, uint32_t par, HITP *hit, int32_t *occluded,
+                                    sc_trace_stats *st, const int ANY)
+{
+    for (uint32_t e = par; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
+        if (ANY) {
+            occluded[l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
+            continue;
+        }
+        sc_hitrec h;
+        if (st)
+            closest_stats_watertight(bvh, &ray, &h, st);
+        else
+            closest_watertight(bvh, &ray, &h);
+        hit->t[l] = h.t, hit->u[l] = h.u, hit->v[l] = h.v, hit->prim[l] = h.prim;
+        hit->ng_x[l] = h.ng[0], hit->ng_y[l] = h.ng[1], hit->ng_z[l] = h.ng[2];
+        hit->geom[l] = h.geom, hit->inst[l] = h.inst;
+    }
+}
+
 /* ---- a stream's group of packets, any hit ----------------------------------
  * SC_GROUP packets (64 rays) of one octant walk the tree together, as
  * Embree's coherent stream traverser does: a node is fetched, tested
@@ -1081,21 +1117,14 @@ SC_X86_INLINE void PFN(group_entry_any)(const sc_bvh *bvh, const PKT *r, const u
                 lead = (int)g;
             together[g] = pl;
             n_together++;
-        } else if (st) {
-            c[g].uniform ? PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], st, 1, 1, 1)
-                         : PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], st, 1, 1, 0);
         } else {
-            c[g].uniform ? PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], NULL, 1, 0, 1)
-                         : PFN(traverse_packet)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], NULL, 1, 0, 0);
+            PFN(pk_walk)(bvh, &r[g], pl, NULL, occluded + g * PK, &c[g], st, 1);
         }
     }
     if (n_together == 1) {
         /* one packet: its own walk, with its own (tighter) frustum */
         const unsigned g = (unsigned)lead;
-        if (st)
-            PFN(traverse_packet)(bvh, &r[g], together[g], NULL, occluded + g * PK, &c[g], st, 1, 1, 1);
-        else
-            PFN(traverse_packet)(bvh, &r[g], together[g], NULL, occluded + g * PK, &c[g], NULL, 1, 0, 1);
+        PFN(pk_walk)(bvh, &r[g], together[g], NULL, occluded + g * PK, &c[g], st, 1);
     } else if (n_together > 1) {
         if (st)
             PFN(traverse_group_any)(bvh, r, together, occluded, c, c[lead].oct, st, 1);
@@ -1103,12 +1132,7 @@ SC_X86_INLINE void PFN(group_entry_any)(const sc_bvh *bvh, const PKT *r, const u
             PFN(traverse_group_any)(bvh, r, together, occluded, c, c[lead].oct, NULL, 0);
     }
     for (unsigned g = 0; g < SC_GROUP; g++)
-        for (uint32_t e = par[g]; e; e &= e - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            const sc_ray ray = { { r[g].ox[l], r[g].oy[l], r[g].oz[l] }, r[g].tmin[l],
-                                 { r[g].dx[l], r[g].dy[l], r[g].dz[l] }, r[g].tmax[l] };
-            occluded[g * PK + l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
-        }
+        PFN(pk_parallel)(bvh, &r[g], par[g], NULL, occluded + g * PK, st, 1);
 }
 
 /* The packet entry points: lanes = the caller's valid lanes (rays already
@@ -1119,30 +1143,9 @@ SC_X86_INLINE void PFN(packet_entry)(const sc_bvh *bvh, const PKT *r, uint32_t l
     pk_ctx c;
     const uint32_t par = PFN(pk_init)(&c, bvh, r, lanes, bvh->cfg.prefilter != SC_PREFILTER_OFF);
     const uint32_t pl = lanes & ~par;
-    if (pl) {
-        if (st)
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, st, ANY, 1, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, st, ANY, 1, 0);
-        else
-            c.uniform ? PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, NULL, ANY, 0, 1)
-                      : PFN(traverse_packet)(bvh, r, pl, hit, occluded, &c, NULL, ANY, 0, 0);
-    }
-    for (uint32_t e = par; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        const sc_ray ray = { { r->ox[l], r->oy[l], r->oz[l] }, r->tmin[l], { r->dx[l], r->dy[l], r->dz[l] }, r->tmax[l] };
-        if (ANY) {
-            occluded[l] = st ? any_stats_watertight(bvh, &ray, st) : any_watertight(bvh, &ray);
-            continue;
-        }
-        sc_hitrec h;
-        if (st)
-            closest_stats_watertight(bvh, &ray, &h, st);
-        else
-            closest_watertight(bvh, &ray, &h);
-        hit->t[l] = h.t, hit->u[l] = h.u, hit->v[l] = h.v, hit->prim[l] = h.prim;
-        hit->ng_x[l] = h.ng[0], hit->ng_y[l] = h.ng[1], hit->ng_z[l] = h.ng[2];
-        hit->geom[l] = h.geom, hit->inst[l] = h.inst;
-    }
+    if (pl)
+        PFN(pk_walk)(bvh, r, pl, hit, occluded, &c, st, ANY);
+    PFN(pk_parallel)(bvh, r, par, hit, occluded, st, ANY);
 }
 
 static SC_TARGET void PFN(closest_packet)(const sc_bvh *bvh, const PKT *r, uint32_t lanes, HITP *hit,
