@@ -34,9 +34,10 @@ struct sc_bvh {
 
 /* A traversal in a tree that does not fit in the caches waits for memory
  * at each child it pops. So from these sizes (nodes and leaves) it
- * prefetches the first four cache lines of the children a node pushes, as
- * Embree does in every tree: closest-hit single rays from 2 MiB (beyond a
- * core's L2), any-hit rays and packets from 8 MiB. Below them the
+ * prefetches the first four cache lines of the children a node pushes (and
+ * of the one it goes to, when only one is hit), as Embree does in every
+ * tree: closest-hit single rays from 2 MiB (beyond a core's L2), any-hit
+ * rays and packets from 8 MiB. Below them the
  * prefetches cost about what they save, and an any-hit ray ends with most
  * of what it pushed never popped. Measured (docs/compare.md, nineteenth
  * session): trees of 19 MB and more gain 2-20 % on every ray kind; trees of
