@@ -34,7 +34,9 @@ SC_X86_INLINE void transpose8x8(__m256 r[8])
  * smallest of lo's) is at most limit, in every lane: each lane compares
  * fl(hi_i - min lo), and the largest of those is fl(max hi - min lo) since
  * rounding is monotone, so this is the specification's test without taking
- * either extreme out to a scalar. */
+ * either extreme out to a scalar. (The minimum broadcast from f32x8_hmin's
+ * scalar instead of this in-register reduction ran camera-ray streams
+ * 1-3 % slower on fast scenes.) */
 SC_X86_INLINE __m256 spread_within8(__m256 lo, __m256 hi, float limit)
 {
     lo = _mm256_min_ps(lo, _mm256_permute2f128_ps(lo, lo, 1));

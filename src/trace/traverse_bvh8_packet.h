@@ -952,6 +952,13 @@ typedef struct {
     uint64_t mask;
 } PFN(group_entry);
 
+/* Packet g's lanes in a group's 64-bit lane mask (bit g * PK + l: lane l
+ * of packet g). */
+SC_X86_INLINE uint32_t PFN(group_lanes)(uint64_t m, unsigned g)
+{
+    return (uint32_t)(m >> (g * PK)) & (PK == 16 ? 0xffffu : 0xffu);
+}
+
 /* Lanes m (bit g * PK + l: lane l of packet g) of the group against child k
  * of node: each packet's lanes with the single ray's box test (rows nr*,
  * fr*: the group's near and far planes). */
@@ -963,7 +970,7 @@ SC_X86_INLINE uint64_t PFN(group_child_lanes)(const pk_ctx *c, const sc_bvh_node
     const pvec nz = PV(set1)(node->b[nr2][k]), fz = PV(set1)(node->b[fr2][k]);
     uint64_t out = 0;
     for (unsigned g = 0; g < SC_GROUP; g++) {
-        const uint32_t mg = (uint32_t)(m >> (g * PK)) & (PK == 16 ? 0xffffu : 0xffu);
+        const uint32_t mg = PFN(group_lanes)(m, g);
         if (!mg)
             continue;
         const pk_ctx *cg = &c[g];
@@ -989,7 +996,6 @@ SC_X86_INLINE void PFN(traverse_group_any)(const sc_bvh *bvh, const PKT *r, cons
                                            int32_t *occluded, const pk_ctx *c, int oct, sc_trace_stats *st,
                                            const int STATS)
 {
-    const uint64_t lmask = PK == 16 ? 0xffffu : 0xffu;
     /* the group's frustum: the union of the packets' (pk_frustum_node
      * reads only these fields) */
     pk_ctx fc;
@@ -1029,7 +1035,7 @@ SC_X86_INLINE void PFN(traverse_group_any)(const sc_bvh *bvh, const PKT *r, cons
             if (__builtin_popcountll(m) <= SC_PACKET_THIN) {
                 /* a thin group: its lanes finish this subtree as single rays */
                 for (unsigned g = 0; g < SC_GROUP; g++) {
-                    uint32_t mg = (uint32_t)(m >> (g * PK)) & (uint32_t)lmask, ag = mg;
+                    uint32_t mg = PFN(group_lanes)(m, g), ag = mg;
                     if (!mg)
                         continue;
                     PFN(pk_single)(bvh, &r[g], ref, mg, &best[g], &ag, st, 1, STATS);
@@ -1072,11 +1078,11 @@ SC_X86_INLINE void PFN(traverse_group_any)(const sc_bvh *bvh, const PKT *r, cons
             m = hmk[0];
         }
         for (unsigned g = 0; g < SC_GROUP; g++) {
-            uint32_t mg = (uint32_t)(m >> (g * PK)) & (uint32_t)lmask, ag = mg;
+            uint32_t mg = PFN(group_lanes)(m, g), ag = mg;
             if (!mg)
                 continue;
             PFN(pk_leaf)(bvh, &c[g], ref, &mg, &ag, &best[g], st, 1, STATS, 1);
-            alive &= ~((uint64_t)((uint32_t)(m >> (g * PK)) & (uint32_t)lmask & ~ag) << (g * PK));
+            alive &= ~((uint64_t)(PFN(group_lanes)(m, g) & ~ag) << (g * PK));
         }
     pop:
         do {
