@@ -34,14 +34,18 @@
 
 /* The first four cache lines of what a child reference points at: a
  * node's boxes and references, or a leaf's spheres and first rows. */
-SC_TRAVERSE_INLINE void sc_prefetch_ref(const sc_bvh *bvh, uint64_t ref)
+SC_TRAVERSE_INLINE void sc_prefetch_at(const char *nodes, const unsigned char *leaves, uint64_t ref)
 {
-    const char *p = sc_ref_is_leaf(ref) ? (const char *)sc_leaf_block(bvh->leaves, ref)
-                                        : (const char *)bvh->nodes + ref;
+    const char *p = sc_ref_is_leaf(ref) ? (const char *)sc_leaf_block(leaves, ref) : nodes + ref;
     __builtin_prefetch(p);
     __builtin_prefetch(p + 64);
     __builtin_prefetch(p + 128);
     __builtin_prefetch(p + 192);
+}
+
+SC_TRAVERSE_INLINE void sc_prefetch_ref(const sc_bvh *bvh, uint64_t ref)
+{
+    sc_prefetch_at((const char *)bvh->nodes, bvh->leaves, ref);
 }
 
 /* The closest hit so far of the watertight and Moller tests (the exact
@@ -223,10 +227,16 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
     if (!bvh->has_root)
         goto done;
 
+    /* Locals, not bvh->nodes at each node: the vector stores of the node
+     * and leaf tests may alias *bvh, so GCC reloaded bvh and then its
+     * nodes before every node's loads, two loads in the way of the next
+     * node after each mispredicted branch. */
+    const char *const nodes = (const char *)bvh->nodes;
+    const unsigned char *const leaves = bvh->leaves;
     uint64_t ref = root;               /* nodes[0], or a subtree (packets hand thin lanes over) */
     for (;;) {
         while (!sc_ref_is_leaf(ref)) {
-            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)((const char *)bvh->nodes + ref);
+            const sc_bvh_node8 *node = (const sc_bvh_node8 *)(const void *)(nodes + ref);
             if (STATS)
                 st->nodes++;
             float dist[SC_BVH_N] __attribute__((aligned(32)));
@@ -245,7 +255,7 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
                  * leaf's rows wait for its set-up; in a large tree each
                  * would be a second wait on memory at this level. */
                 if (prefetch)
-                    sc_prefetch_ref(bvh, ref);
+                    sc_prefetch_at(nodes, leaves, ref);
                 continue;
             }
             /* In a large tree every hit child's first four cache lines
@@ -255,7 +265,7 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
              * popped: hence any-hit rays prefetch only in the largest trees. */
             if (prefetch)
                 for (unsigned h = m; h; h &= h - 1)
-                    sc_prefetch_ref(bvh, node->child[__builtin_ctz(h)]);
+                    sc_prefetch_at(nodes, leaves, node->child[__builtin_ctz(h)]);
             ref = push_children(node, m, dist, stack, &sp, ANY, OCT);
         }
         if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST))

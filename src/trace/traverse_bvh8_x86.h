@@ -146,12 +146,17 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
  * sc_order_children's exactly (ties by slot; -0 as 0), and the traversal
  * visits leaves in the same order on every ISA level (the exact test's
  * reported t, u, v can depend on it). Hits are sorted descending (misses
- * -1, last) in one zmm register, the child references permuted into that
- * order, all eight stack entries stored, and the stack pointer moved past
- * the hits but the nearest, which is returned. */
-SC_X86_INLINE __m512i sort8_desc_step(__m512i v, __m512i p, const __mmask8 take_max)
+ * -1, last) in two ymm registers, keys 0-3 and 4-7 (the partner i ^ 4 is
+ * the other register), the child references permuted into that order, all
+ * eight stack entries stored, and the stack pointer moved past the hits
+ * but the nearest, which is returned. The same network in one zmm register
+ * ran 0-4 % slower on diffuse rays (docs/compare.md, thirty-fourth
+ * session): the single-ray kernels keep to 256-bit registers. */
+/* one compare-exchange step of the network over keys 0-3 (a) and 4-7 (b):
+ * each key against its partner, the larger kept where take_max says */
+SC_X86_INLINE __m256i sort4_step(__m256i v, __m256i p, const __mmask8 take_max)
 {
-    return _mm512_mask_blend_epi64(take_max, _mm512_min_epi64(v, p), _mm512_max_epi64(v, p));
+    return _mm256_mask_blend_epi64(take_max, _mm256_min_epi64(v, p), _mm256_max_epi64(v, p));
 }
 
 SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, const float *dist,
@@ -160,35 +165,43 @@ SC_X86_INLINE uint64_t order_children(const sc_bvh_node8 *node, unsigned mask, c
     const unsigned rest = mask & (mask - 1);
     if ((rest & (rest - 1)) == 0)
         return sc_order_children(node, mask, dist, stack, sp);
+    /* one load of the 8 distances, the size of the node test's store, so
+     * that the compiler can take them from the register it stored */
     const __m256i bits = _mm256_max_epi32(_mm256_load_si256((const __m256i *)(const void *)dist),
                                           _mm256_setzero_si256());   /* -0 -> 0; hits are >= 0 */
-    __m512i v = _mm512_or_si512(_mm512_slli_epi64(_mm512_cvtepu32_epi64(bits), 32),
-                                _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7));
-    v = _mm512_mask_blend_epi64((__mmask8)mask, _mm512_set1_epi64(-1), v);
-    /* bitonic network; partners i ^ 1, i ^ 2, i ^ 4 */
-#define P1(x) _mm512_shuffle_epi32((x), (_MM_PERM_ENUM)0x4e)
-#define P2(x) _mm512_permutex_epi64((x), 0x4e)
-#define P4(x) _mm512_shuffle_i64x2((x), (x), 0x4e)
-    v = sort8_desc_step(v, P1(v), 0x99);
-    v = sort8_desc_step(v, P2(v), 0xc3);
-    v = sort8_desc_step(v, P1(v), 0xa5);
-    v = sort8_desc_step(v, P4(v), 0x0f);
-    v = sort8_desc_step(v, P2(v), 0x33);
-    v = sort8_desc_step(v, P1(v), 0x55);
+    const __m128i d0 = _mm256_castsi256_si128(bits), d1 = _mm256_extracti128_si256(bits, 1);
+    __m256i a = _mm256_or_si256(_mm256_slli_epi64(_mm256_cvtepu32_epi64(d0), 32), _mm256_setr_epi64x(0, 1, 2, 3));
+    __m256i b = _mm256_or_si256(_mm256_slli_epi64(_mm256_cvtepu32_epi64(d1), 32), _mm256_setr_epi64x(4, 5, 6, 7));
+    a = _mm256_mask_blend_epi64((__mmask8)(mask & 15), _mm256_set1_epi64x(-1), a);
+    b = _mm256_mask_blend_epi64((__mmask8)(mask >> 4), _mm256_set1_epi64x(-1), b);
+#define P1(x) _mm256_shuffle_epi32((x), (_MM_PERM_ENUM)0x4e)
+#define P2(x) _mm256_permute4x64_epi64((x), 0x4e)
+    a = sort4_step(a, P1(a), 0x9), b = sort4_step(b, P1(b), 0x9);
+    a = sort4_step(a, P2(a), 0x3), b = sort4_step(b, P2(b), 0xc);
+    a = sort4_step(a, P1(a), 0x5), b = sort4_step(b, P1(b), 0xa);
+    {
+        const __m256i hi = _mm256_max_epi64(a, b);
+        b = _mm256_min_epi64(a, b);
+        a = hi;
+    }
+    a = sort4_step(a, P2(a), 0x3), b = sort4_step(b, P2(b), 0x3);
+    a = sort4_step(a, P1(a), 0x5), b = sort4_step(b, P1(b), 0x5);
 #undef P1
 #undef P2
-#undef P4
-    const __m512i refs = _mm512_permutexvar_epi64(_mm512_and_si512(v, _mm512_set1_epi64(7)),
-                                                  _mm512_load_si512((const void *)node->child));
-    const __m512i dq = _mm512_srli_epi64(v, 32);   /* the distance, and 0 as the entry's padding */
+    const __m256i c0 = _mm256_load_si256((const __m256i *)(const void *)node->child);
+    const __m256i c1 = _mm256_load_si256((const __m256i *)(const void *)(node->child + 4));
+    const __m256i ra = _mm256_permutex2var_epi64(c0, a, c1), rb = _mm256_permutex2var_epi64(c0, b, c1);
+    const __m256i qa = _mm256_srli_epi64(a, 32), qb = _mm256_srli_epi64(b, 32);
     sc_stack_entry *s = stack + *sp;               /* sc_stack_entry: ref, dist, 4 bytes of padding */
-    _mm512_storeu_si512((void *)s, _mm512_permutex2var_epi64(refs, _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11), dq));
-    _mm512_storeu_si512((void *)(s + 4),
-                        _mm512_permutex2var_epi64(refs, _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15), dq));
+    const __m256i lo = _mm256_setr_epi64x(0, 4, 1, 5), hi = _mm256_setr_epi64x(2, 6, 3, 7);
+    _mm256_storeu_si256((__m256i *)(void *)s, _mm256_permutex2var_epi64(ra, lo, qa));
+    _mm256_storeu_si256((__m256i *)(void *)(s + 2), _mm256_permutex2var_epi64(ra, hi, qa));
+    _mm256_storeu_si256((__m256i *)(void *)(s + 4), _mm256_permutex2var_epi64(rb, lo, qb));
+    _mm256_storeu_si256((__m256i *)(void *)(s + 6), _mm256_permutex2var_epi64(rb, hi, qb));
     const int near = __builtin_popcount(mask) - 1;
     *sp += near;
     return (uint64_t)_mm_cvtsi128_si64(
-        _mm512_castsi512_si128(_mm512_permutexvar_epi64(_mm512_set1_epi64(near), refs)));
+        _mm256_castsi256_si128(_mm256_permutex2var_epi64(ra, _mm256_set1_epi64x(near), rb)));
 }
 #define SC_ORDER_CHILDREN order_children
 #endif
