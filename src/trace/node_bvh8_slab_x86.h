@@ -34,8 +34,16 @@ node_test(const trace_ctx *c, const sc_bvh_node8 *node, float tmin, float tmax, 
 #undef FIXED
 #undef ROWB
     (void)tmin;
-    __m256 tn = _mm256_max_ps(_mm256_max_ps(tnx, tny), _mm256_max_ps(tnz, c->tmin));
-    __m256 tf = _mm256_min_ps(_mm256_min_ps(tfx, tfy), _mm256_min_ps(tfz, _mm256_set1_ps(tmax)));
+    /* The maximum and minimum as signed integers (one cycle each, against
+     * four for maxps/minps, on the path from a node's loads to its child's),
+     * as Embree does; ctx_set_slab says why that gives the float test's
+     * answer. The compare stays a float compare. */
+#define I(x) _mm256_castps_si256(x)
+    const __m256i tmaxi = I(_mm256_set1_ps(tmax + 0.0f));   /* -0 as +0 */
+    const __m256 tn = _mm256_castsi256_ps(
+        _mm256_max_epi32(_mm256_max_epi32(I(tnx), I(tny)), _mm256_max_epi32(I(tnz), I(c->tmin))));
+    const __m256 tf = _mm256_castsi256_ps(_mm256_min_epi32(_mm256_min_epi32(I(tfx), I(tfy)), _mm256_min_epi32(I(tfz), tmaxi)));
+#undef I
     if (WANT_DIST)
         _mm256_store_ps(dist, tn);
 #if SC_X86_AVX512

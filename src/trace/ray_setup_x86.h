@@ -28,7 +28,8 @@ SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
 {
     for (int k = 0; k < 3; k++) {
         c->ordn[k] = _mm256_set1_ps(p->ord_near[k]);
-        c->ordf[k] = _mm256_set1_ps(p->ord_far[k]);
+        /* +0 as -0: see ctx_set_slab */
+        c->ordf[k] = _mm256_set1_ps(p->ord_far[k] == 0.0f ? -0.0f : p->ord_far[k]);
         c->rd[k] = _mm256_set1_ps(p->rd[k]);
         c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
         c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
@@ -44,7 +45,7 @@ SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
     c->Sx = _mm256_set1_ps(p->Sx);
     c->Sy = _mm256_set1_ps(p->Sy);
     c->Sz = _mm256_set1_ps(p->Sz);
-    c->tmin = _mm256_set1_ps(p->tmin);
+    c->tmin = _mm256_set1_ps(p->tmin + 0.0f);   /* -0 as +0: see ctx_set_slab */
     c->xK = _mm256_set1_ps(p->xK);
     c->xc0 = _mm256_set1_ps(p->xc0);
 }
@@ -72,8 +73,20 @@ SC_X86_INLINE void slab_offsets4(__m128 o, __m128 rd, __m128 m, __m128 *ordn, __
 }
 
 /* The node test's per-ray constants from the three axes in xmm lanes 0-2. */
+/* node_test takes the largest entry and the smallest exit distance as
+ * signed integers, which order floats as floats do except the negative
+ * ones (in reverse, and -0 below every other). With tmin >= +0 among the
+ * entries, a negative entry never wins, so the entry is the float maximum
+ * (up to the sign of a zero). An exit is the float minimum when none is
+ * negative, and some negative otherwise, which fails the float test
+ * entry <= exit as the true minimum does: unless it is -0 and the entry
+ * +0. So no exit distance may be -0: tmin and tmax are taken as +0 for -0
+ * (x + 0.0f), and a far offset of +0 as -0, so that fl(p rd - ordf) is +0
+ * where the product is -0 (an exact zero difference is +0 anyway). */
 SC_X86_INLINE void ctx_set_slab(trace_ctx *c, __m128 rd, __m128 ordn, __m128 ordf, float tmin)
 {
+    ordf = _mm_or_ps(ordf, _mm_and_ps(_mm_cmpeq_ps(ordf, _mm_setzero_ps()), _mm_set1_ps(-0.0f)));
+    tmin += 0.0f;
 #define BC(v, k) _mm256_broadcastss_ps(_mm_permute_ps((v), (k) * 0x55))
     c->rd[0] = BC(rd, 0), c->rd[1] = BC(rd, 1), c->rd[2] = BC(rd, 2);
     c->ordn[0] = BC(ordn, 0), c->ordn[1] = BC(ordn, 1), c->ordn[2] = BC(ordn, 2);
