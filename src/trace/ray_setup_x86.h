@@ -24,32 +24,6 @@ typedef struct {
     int kx, ky, kz;
 } trace_ctx;
 
-SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
-{
-    for (int k = 0; k < 3; k++) {
-        c->ordn[k] = _mm256_set1_ps(p->ord_near[k]);
-        /* +0 as -0: see ctx_set_slab */
-        c->ordf[k] = _mm256_set1_ps(p->ord_far[k] == 0.0f ? -0.0f : p->ord_far[k]);
-        c->rd[k] = _mm256_set1_ps(p->rd[k]);
-        c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
-        c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
-        c->org_s[k] = p->org[k];
-        c->org[k] = _mm256_set1_ps(p->org[k]);
-        c->rdp[k] = _mm256_set1_ps(p->rdp[k]);
-        c->dir_s[k] = p->dir[k];
-    }
-    c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
-    c->okx = _mm256_set1_ps(p->org[p->kx]);
-    c->oky = _mm256_set1_ps(p->org[p->ky]);
-    c->okz = _mm256_set1_ps(p->org[p->kz]);
-    c->Sx = _mm256_set1_ps(p->Sx);
-    c->Sy = _mm256_set1_ps(p->Sy);
-    c->Sz = _mm256_set1_ps(p->Sz);
-    c->tmin = _mm256_set1_ps(p->tmin + 0.0f);   /* -0 as +0: see ctx_set_slab */
-    c->xK = _mm256_set1_ps(p->xK);
-    c->xc0 = _mm256_set1_ps(p->xc0);
-}
-
 /* Per axis in xmm lanes, the larger distance of o from a box's planes
  * (lo and hi: three floats each, a fourth readable). */
 SC_X86_INLINE __m128 box_reach4(const float *lo, const float *hi, __m128 o)
@@ -72,8 +46,9 @@ SC_X86_INLINE void slab_offsets4(__m128 o, __m128 rd, __m128 m, __m128 *ordn, __
     *ordf = _mm_sub_ps(ord, pad);
 }
 
-/* The node test's per-ray constants from the three axes in xmm lanes 0-2. */
-/* node_test takes the largest entry and the smallest exit distance as
+/* The node test's per-ray constants from the three axes in xmm lanes 0-2,
+ * the only place they are set (ctx_init comes through here too).
+ * node_test takes the largest entry and the smallest exit distance as
  * signed integers, which order floats as floats do except the negative
  * ones (in reverse, and -0 below every other). With tmin >= +0 among the
  * entries, a negative entry never wins, so the entry is the float maximum
@@ -93,6 +68,32 @@ SC_X86_INLINE void ctx_set_slab(trace_ctx *c, __m128 rd, __m128 ordn, __m128 ord
     c->ordf[0] = BC(ordf, 0), c->ordf[1] = BC(ordf, 1), c->ordf[2] = BC(ordf, 2);
 #undef BC
     c->tmin = _mm256_set1_ps(tmin);
+}
+
+/* The whole context from sc_ray_precompute's constants (the generic and
+ * counting kernels); its node-test rows through ctx_set_slab. */
+SC_X86_INLINE void ctx_init(trace_ctx *c, const sc_ray_pre *p)
+{
+#define XYZ(v) _mm_setr_ps((v)[0], (v)[1], (v)[2], 0.0f)
+    ctx_set_slab(c, XYZ(p->rd), XYZ(p->ord_near), XYZ(p->ord_far), p->tmin);
+#undef XYZ
+    for (int k = 0; k < 3; k++) {
+        c->near_off[k] = (size_t)p->near_row[k] * SC_BVH_N * sizeof(float);
+        c->far_off[k] = (size_t)p->far_row[k] * SC_BVH_N * sizeof(float);
+        c->org_s[k] = p->org[k];
+        c->org[k] = _mm256_set1_ps(p->org[k]);
+        c->rdp[k] = _mm256_set1_ps(p->rdp[k]);
+        c->dir_s[k] = p->dir[k];
+    }
+    c->kx = p->kx, c->ky = p->ky, c->kz = p->kz;
+    c->okx = _mm256_set1_ps(p->org[p->kx]);
+    c->oky = _mm256_set1_ps(p->org[p->ky]);
+    c->okz = _mm256_set1_ps(p->org[p->kz]);
+    c->Sx = _mm256_set1_ps(p->Sx);
+    c->Sy = _mm256_set1_ps(p->Sy);
+    c->Sz = _mm256_set1_ps(p->Sz);
+    c->xK = _mm256_set1_ps(p->xK);
+    c->xc0 = _mm256_set1_ps(p->xc0);
 }
 
 /* The set-up of a non-parallel ray (every kernel with a known octant):

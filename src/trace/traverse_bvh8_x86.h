@@ -151,9 +151,9 @@ leaf_test(const trace_ctx *c, const float *rows, unsigned W, unsigned live, floa
  * eight stack entries stored, and the stack pointer moved past the hits
  * but the nearest, which is returned. The same network in one zmm register
  * ran 0-4 % slower on diffuse rays (docs/compare.md, thirty-fourth
- * session): the single-ray kernels keep to 256-bit registers. */
-/* one compare-exchange step of the network over keys 0-3 (a) and 4-7 (b):
- * each key against its partner, the larger kept where take_max says */
+ * session): the single-ray kernels keep to 256-bit registers.
+ * sort4_step: one compare-exchange step within a register, each key against
+ * its partner, the larger kept where take_max says. */
 SC_X86_INLINE __m256i sort4_step(__m256i v, __m256i p, const __mmask8 take_max)
 {
     return _mm256_mask_blend_epi64(take_max, _mm256_min_epi64(v, p), _mm256_max_epi64(v, p));
