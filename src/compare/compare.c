@@ -506,13 +506,19 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
 
 /* ---- output --------------------------------------------------------------- */
 
-static void fmt_num(char *buf, size_t n, const char *fmt, double v)
+/* v with fmt, or mark where v is NaN ("not applicable"). */
+static void fmt_or(char *buf, size_t n, const char *fmt, double v, const char *mark)
 {
     if (isnan(v))
-        snprintf(buf, n, "-");
+        snprintf(buf, n, "%s", mark);
     else
         snprintf(buf, n, fmt, v);
 }
+
+static void fmt_num(char *buf, size_t n, const char *fmt, double v) { fmt_or(buf, n, fmt, v, "-"); }
+
+/* an empty CSV cell for "not applicable" */
+static void csv_num(char *buf, size_t n, const char *fmt, double v) { fmt_or(buf, n, fmt, v, ""); }
 
 int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
 {
@@ -524,15 +530,14 @@ int sc_cmp_write_csv(const sc_cmp_rows *rows, FILE *f)
     for (size_t i = 0; i < rows->count; i++) {
         const sc_cmp_row *r = &rows->rows[i];
         char a[32], b[32], c[32], d[32], e[32], g[32], h[32], be[32];
-        /* empty CSV cells for "not applicable" */
-        snprintf(a, sizeof a, isnan(r->t_err_max) ? "" : "%.3e", r->t_err_max);
-        snprintf(b, sizeof b, isnan(r->sphere_tests_per_ray) ? "" : "%.3f", r->sphere_tests_per_ray);
-        snprintf(c, sizeof c, isnan(r->sphere_reject_rate) ? "" : "%.4f", r->sphere_reject_rate);
-        snprintf(d, sizeof d, isnan(r->false_positive_rate) ? "" : "%.4f", r->false_positive_rate);
-        snprintf(e, sizeof e, isnan(r->tri_tests_per_ray) ? "" : "%.3f", r->tri_tests_per_ray);
-        snprintf(g, sizeof g, isnan(r->t_err_median) ? "" : "%.3e", r->t_err_median);
-        snprintf(h, sizeof h, isnan(r->speed_vs_embree) ? "" : "%.3f", r->speed_vs_embree);
-        snprintf(be, sizeof be, isnan(r->best_embree) ? "" : "%.4g", r->best_embree);
+        csv_num(a, sizeof a, "%.3e", r->t_err_max);
+        csv_num(b, sizeof b, "%.3f", r->sphere_tests_per_ray);
+        csv_num(c, sizeof c, "%.4f", r->sphere_reject_rate);
+        csv_num(d, sizeof d, "%.4f", r->false_positive_rate);
+        csv_num(e, sizeof e, "%.3f", r->tri_tests_per_ray);
+        csv_num(g, sizeof g, "%.3e", r->t_err_median);
+        csv_num(h, sizeof h, "%.3f", r->speed_vs_embree);
+        csv_num(be, sizeof be, "%.4g", r->best_embree);
         sc_csv_str(f, r->scene);
         fprintf(f, ",%u,%s,", r->triangles, sc_rayset_kind_name(r->rays));
         sc_csv_str(f, r->tracer);
