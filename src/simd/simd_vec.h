@@ -134,6 +134,11 @@ SC_VI SC_ATTR_AVX2 void f32x8_store_lanes(float *p, uint32_t bits, f32x8_t v)
 }
 /* A lane of bit pattern x (an id, a NaN payload) in every lane. */
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_set1_bits(uint32_t x) { return _mm256_castsi256_ps(_mm256_set1_epi32((int)x)); }
+/* Lanes whose bit patterns are equal (ids, where a float compare would see NaNs). */
+SC_VI SC_ATTR_AVX2 f32x8_m f32x8_eq_bits(f32x8_t a, f32x8_t b)
+{
+    return _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_castps_si256(a), _mm256_castps_si256(b)));
+}
 SC_VI SC_ATTR_AVX2 void f32x8_stream(float *p, f32x8_t v) { _mm256_stream_ps(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_add(f32x8_t a, f32x8_t b) { return _mm256_add_ps(a, b); }
 SC_VI SC_ATTR_AVX2 f32x8_t f32x8_sub(f32x8_t a, f32x8_t b) { return _mm256_sub_ps(a, b); }
@@ -238,6 +243,10 @@ SC_VI SC_ATTR_AVX512 f32x16_t f32x16_load(const float *p) { return _mm512_loadu_
 SC_VI SC_ATTR_AVX512 void f32x16_store(float *p, f32x16_t v) { _mm512_storeu_ps(p, v); }
 SC_VI SC_ATTR_AVX512 void f32x16_store_lanes(float *p, uint32_t bits, f32x16_t v) { _mm512_mask_storeu_ps(p, (__mmask16)bits, v); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_set1_bits(uint32_t x) { return _mm512_castsi512_ps(_mm512_set1_epi32((int)x)); }
+SC_VI SC_ATTR_AVX512 f32x16_m f32x16_eq_bits(f32x16_t a, f32x16_t b)
+{
+    return _mm512_cmpeq_epi32_mask(_mm512_castps_si512(a), _mm512_castps_si512(b));
+}
 SC_VI SC_ATTR_AVX512 void f32x16_stream(float *p, f32x16_t v) { _mm512_stream_ps(p, v); }   /* p aligned to the vector */
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_add(f32x16_t a, f32x16_t b) { return _mm512_add_ps(a, b); }
 SC_VI SC_ATTR_AVX512 f32x16_t f32x16_sub(f32x16_t a, f32x16_t b) { return _mm512_sub_ps(a, b); }

@@ -206,13 +206,11 @@ static inline int sc_top_better(const sc_hitrec *h, const sc_hitrec *best)
  * (within the ray's own end), so that a hit of another item at the same
  * rounded t, which may win the tie, is still reached. A hit found past
  * best->t loses to it (sc_top_better). */
-static inline float sc_top_tmax(const sc_hitrec *best, float ray_tmax)
+static inline float sc_top_tmax_t(float t, float ray_tmax)
 {
-    if (best->prim == SC_HITREC_MISS)
-        return ray_tmax;
     /* the next float up, by its bits (t >= tmin >= 0; not libm's
      * nextafterf, a call on every node a ray visits) */
-    float up = best->t;
+    float up = t;
     if (up >= 0 && up < INFINITY) {
         uint32_t bits;
         memcpy(&bits, &up, sizeof bits);
@@ -220,6 +218,11 @@ static inline float sc_top_tmax(const sc_hitrec *best, float ray_tmax)
         memcpy(&up, &bits, sizeof up);
     }
     return up < ray_tmax ? up : ray_tmax;
+}
+
+static inline float sc_top_tmax(const sc_hitrec *best, float ray_tmax)
+{
+    return best->prim == SC_HITREC_MISS ? ray_tmax : sc_top_tmax_t(best->t, ray_tmax);
 }
 
 /* How far an item's BVH is traced. The exact test's reported t is rounded

@@ -60,7 +60,10 @@ typedef struct top_pk {
     int uniform, oct;                                /* every lane in octant oct */
     /* a uniform packet's frustum: the extreme rd and offsets over the lanes */
     float fr_rdmin[3], fr_rdmax[3], fr_onmax[3], fr_ofmin[3], fr_tmin, fr_tmax;
-    sc_hitrec best[16];                              /* closest */
+    /* closest: each lane's best hit so far, rows as sc_hit_packet16 (t u v
+     * prim ngx ngy ngz geom inst), so that an object packet's hits merge in
+     * vectors and the answer is stored as rows */
+    float hit[9][16] __attribute__((aligned(64)));
     int32_t *occluded;                               /* any */
     const sc_top *T;
     unsigned W;
@@ -89,9 +92,71 @@ SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
 /* A hit h of item it for lane l: kept if it beats the lane's best. */
 SC_TRAVERSE_INLINE void top_pk_offer(top_pk *P, const sc_top_item *it, const sc_bvh *b, unsigned l, sc_hitrec *h)
 {
-    if (sc_top_offer(it, b, h, &P->best[l]))
+    sc_hitrec best;
+    sc_hit_lane_get(P->hit, 16, l, &best);
+    if (sc_top_offer(it, b, h, &best)) {
+        sc_hit_lane_put(P->hit, 16, l, &best);
         P->tcull[l] = sc_top_tmax(h, P->tmax[l]);
+    }
 }
+
+#ifdef SC_TOP_VP
+/* The hits of an object packet (rows of W lanes, src) of item it, whose
+ * BVH holds one mesh, for lanes L: sc_top_offer lane by lane, in vectors.
+ * A hit wins where the lane has none yet or where it is nearer; at equal t
+ * the ids decide, lane by lane (sc_top_better). The normal is taken to
+ * world space as sc_top_normal does, in the same order of operations, so
+ * the same bits. */
+SC_TRAVERSE_INLINE void top_pk_merge(top_pk *P, const sc_top_item *it, const float *src, unsigned W, uint32_t L)
+{
+    enum { VW = TV(N) };
+    const TV(t) miss = TV(set1_bits)(SC_HITREC_MISS);
+    for (unsigned h = 0; h < W; h += VW) {
+        const uint32_t m = (L >> h) & ((1u << VW) - 1);
+        if (!m)
+            continue;
+        const TV(t) nt = TV(load)(src + h), bt = TV(load)(P->hit[0] + h);
+        const uint32_t nhit = m & ~TV(bits)(TV(eq_bits)(TV(load)(src + 3 * W + h), miss));
+        if (!nhit)
+            continue;
+        const uint32_t bmiss = TV(bits)(TV(eq_bits)(TV(load)(P->hit[3] + h), miss));
+        uint32_t better = nhit & (bmiss | TV(bits)(TV(lt)(nt, bt)));
+        for (uint32_t e = nhit & ~better & TV(bits)(TV(eq)(nt, bt)); e; e &= e - 1) {
+            const unsigned l = h + (unsigned)__builtin_ctz(e);
+            sc_hitrec nh, bh;
+            sc_hit_lane_get(src, W, l, &nh);
+            nh.inst = it->inst;
+            sc_hit_lane_get(P->hit, 16, l, &bh);
+            if (sc_top_better(&nh, &bh))
+                better |= 1u << (l - h);
+        }
+        if (!better)
+            continue;
+        const TV(m) M = TV(mask_from_bits)(better);
+        static const int rows[5] = { 0, 1, 2, 3, 7 };
+        for (int r = 0; r < 5; r++)
+            TV(store)(P->hit[rows[r]] + h,
+                      TV(sel)(M, TV(load)(src + (unsigned)rows[r] * W + h), TV(load)(P->hit[rows[r]] + h)));
+        TV(store)(P->hit[8] + h, TV(sel)(M, TV(set1_bits)(it->inst), TV(load)(P->hit[8] + h)));
+        TV(t) n[3] = { TV(load)(src + 4 * W + h), TV(load)(src + 5 * W + h), TV(load)(src + 6 * W + h) };
+        if (it->inv) {
+            const float *c = it->cof;
+            TV(t) g[3];
+            for (int i = 0; i < 3; i++)
+                g[i] = TV(add)(TV(add)(TV(mul)(TV(set1)(c[3 * i]), n[0]), TV(mul)(TV(set1)(c[3 * i + 1]), n[1])),
+                               TV(mul)(TV(set1)(c[3 * i + 2]), n[2]));
+            for (int i = 0; i < 3; i++)
+                n[i] = g[i];
+        }
+        for (int i = 0; i < 3; i++)
+            TV(store)(P->hit[4 + i] + h, TV(sel)(M, n[i], TV(load)(P->hit[4 + i] + h)));
+        for (uint32_t e = better; e; e &= e - 1) {
+            const unsigned l = h + (unsigned)__builtin_ctz(e);
+            P->tcull[l] = sc_top_tmax_t(P->hit[0][l], P->tmax[l]);
+        }
+    }
+}
+#endif
 
 /* Lane l's world ray, ending at tmax. */
 SC_TRAVERSE_INLINE sc_ray top_pk_ray(const top_pk *P, unsigned l, float tmax)
@@ -228,6 +293,12 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     } else {
         sc_hit_packet16 hp;
         sc_trace_packet_lanes(b, ok, pk, W, &hp, 0, sp);
+#ifdef SC_TOP_VP
+        if (b->mesh_count < 2) {
+            top_pk_merge(P, it, (const float *)(const void *)&hp, W, ok);
+            goto done;
+        }
+#endif
         for (uint32_t e = ok; e; e &= e - 1) {
             const unsigned l = (unsigned)__builtin_ctz(e);
             sc_hitrec h;
@@ -578,6 +649,47 @@ SC_TRAVERSE_INLINE uint32_t top_pk_load(top_pk *P, uint32_t lanes, const float *
     return single;
 }
 
+/* Every lane's best hit a miss at its tmax (sc_top_miss). */
+SC_TRAVERSE_INLINE void top_pk_misses(top_pk *P)
+{
+#ifdef SC_TOP_VP
+    const TV(t) zero = TV(set1)(0), miss = TV(set1_bits)(SC_HITREC_MISS), inv = TV(set1_bits)(SC_INVALID_ID);
+    for (unsigned h = 0; h < 16; h += TV(N)) {
+        TV(store)(P->hit[0] + h, TV(load)(P->tmax + h));
+        TV(store)(P->hit[1] + h, zero), TV(store)(P->hit[2] + h, zero);
+        TV(store)(P->hit[3] + h, miss);
+        TV(store)(P->hit[4] + h, zero), TV(store)(P->hit[5] + h, zero), TV(store)(P->hit[6] + h, zero);
+        TV(store)(P->hit[7] + h, inv), TV(store)(P->hit[8] + h, inv);
+    }
+#else
+    for (unsigned l = 0; l < 16; l++) {
+        sc_hitrec h;
+        sc_top_miss(P->tmax[l], &h);
+        sc_hit_lane_put(P->hit, 16, l, &h);
+    }
+#endif
+}
+
+/* The best hits of lanes `lanes` into out (rows of P->W lanes). */
+SC_TRAVERSE_INLINE void top_pk_store(const top_pk *P, uint32_t lanes, void *out)
+{
+    const unsigned W = P->W;
+#ifdef SC_TOP_VP
+    if (W % TV(N) == 0) {
+        for (unsigned r = 0; r < 9; r++)
+            for (unsigned h = 0; h < W; h += TV(N))
+                TV(store_lanes)((float *)out + r * W + h, lanes >> h, TV(load)(P->hit[r] + h));
+        return;
+    }
+#endif
+    for (uint32_t e = lanes; e; e &= e - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(e);
+        sc_hitrec h;
+        sc_hit_lane_get(P->hit, 16, l, &h);
+        sc_hit_lane_put(out, W, l, &h);
+    }
+}
+
 /* Lanes `lanes` (checked rays) of a W-lane packet (rows as
  * sc_trace_packet_lanes) through the top level; out as there (closest: the
  * traced lanes' hits, misses included, written at the end). Statistics: the packet's top nodes and the
@@ -594,13 +706,11 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
      * over all 16; the lanes not traced repeat the first traced one */
     int inc;   /* lanes in several octants (bounce rays): see below */
     uint32_t single = top_pk_load(&P, lanes, rows, &inc);
-    for (uint32_t e = lanes; e; e &= e - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(e);
-        if (any)
-            P.occluded[l] = 0;
-        else
-            sc_top_miss(P.tmax[l], &P.best[l]);
-    }
+    if (any)
+        for (uint32_t e = lanes; e; e &= e - 1)
+            P.occluded[__builtin_ctz(e)] = 0;
+    else
+        top_pk_misses(&P);
     uint32_t pl = lanes & ~single;
     if (pl) {
         top_pk_spread(&P, pl);
@@ -613,12 +723,17 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     for (uint32_t e = single; e; e &= e - 1) {
         const unsigned l = (unsigned)__builtin_ctz(e);
         const sc_ray r = top_pk_ray(&P, l, P.tmax[l]);
-        if (any)
+        if (any) {
             P.occluded[l] = st ? top_any(T, &r, st) : top_any_walk(T, &r, inc);
-        else if (st)
-            top_closest(T, &r, &P.best[l], st);
-        else
-            top_closest_walk(T, &r, &P.best[l], inc);
+        } else {
+            sc_hitrec h;
+            sc_top_miss(P.tmax[l], &h);
+            if (st)
+                top_closest(T, &r, &h, st);
+            else
+                top_closest_walk(T, &r, &h, inc);
+            sc_hit_lane_put(P.hit, 16, l, &h);
+        }
     }
     if (!pl)
         goto done;
@@ -680,10 +795,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     }
 done:
     if (!any)
-        for (uint32_t e = lanes; e; e &= e - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(e);
-            sc_hit_lane_put(out, W, l, &P.best[l]);
-        }
+        top_pk_store(&P, lanes, out);
 }
 
 #ifdef SC_TOP_VP
