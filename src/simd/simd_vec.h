@@ -172,6 +172,21 @@ SC_VI SC_ATTR_AVX2 float f32x8_hmin(f32x8_t v)
     m = _mm_min_ss(m, _mm_shuffle_ps(m, m, 1));
     return _mm_cvtss_f32(m);
 }
+/* The smallest lane of each of eight vectors (no NaN lanes): lane i of
+ * the result is f32x8_hmin(v[i]), in about 20 operations where eight
+ * f32x8_hmin take about 50. */
+SC_VI SC_ATTR_AVX2 f32x8_t f32x8_hmin8(const f32x8_t v[8])
+{
+    __m256 a[4], b[2];
+    /* per 128-bit half, both vectors' lanes 0^2 and 1^3 */
+    for (int i = 0; i < 4; i++)
+        a[i] = _mm256_min_ps(_mm256_unpacklo_ps(v[2 * i], v[2 * i + 1]), _mm256_unpackhi_ps(v[2 * i], v[2 * i + 1]));
+    /* per half: the half's minimum of four vectors */
+    for (int i = 0; i < 2; i++)
+        b[i] = _mm256_min_ps(_mm256_shuffle_ps(a[2 * i], a[2 * i + 1], 0x44),
+                             _mm256_shuffle_ps(a[2 * i], a[2 * i + 1], 0xee));
+    return _mm256_min_ps(_mm256_permute2f128_ps(b[0], b[1], 0x20), _mm256_permute2f128_ps(b[0], b[1], 0x31));
+}
 SC_VI SC_ATTR_AVX2 f32x8_m f32x8_mask_from_bits(uint32_t bits)
 {
     __m256i b = _mm256_set1_epi32((int)bits), sel = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);

@@ -374,6 +374,23 @@ SC_TRAVERSE_INLINE void top_pk_unit_dirs(const top_pk *P, float u[3][16])
 }
 #endif
 
+#ifdef SC_TOP_VP
+/* The minima over the 16 lanes of L of 16 rows (+inf for no lane), in
+ * vectors of 8 (TV(hmin8) exists for the 8-lane shape SC_TOP_VP is): the
+ * two halves' minimum, then the eight and eight reductions at once. */
+SC_TRAVERSE_INLINE void top_pk_mins16(const float *const rows[16], uint32_t L, float out[16])
+{
+    const TV(t) pinf = TV(set1)(INFINITY);
+    const TV(m) m0 = TV(mask_from_bits)(L), m1 = TV(mask_from_bits)(L >> 8);
+    TV(t) v[16];
+    for (int i = 0; i < 16; i++)
+        v[i] = rows[i] ? TV(min)(TV(sel)(m0, TV(load)(rows[i]), pinf), TV(sel)(m1, TV(load)(rows[i] + 8), pinf))
+                       : pinf;
+    TV(store)(out, TV(hmin8)(v));
+    TV(store)(out + 8, TV(hmin8)(v + 8));
+}
+#endif
+
 /* The packet's first origin and its spreads: the extents over the lanes of
  * its origins and of its unit-L1 directions, the larger axis of each. */
 SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
@@ -382,9 +399,27 @@ SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
     top_pk_unit_dirs(P, u);
     const unsigned f0 = (unsigned)__builtin_ctz(lanes);
     P->ospread = P->dspread = 0;
+#ifdef SC_TOP_VP
+    /* the maxima as minima of the negated rows */
+    float neg[6][16] __attribute__((aligned(64)));
+    const TV(t) zero = TV(set1)(0);
+    for (int k = 0; k < 3; k++)
+        for (unsigned h = 0; h < 16; h += TV(N)) {
+            TV(store)(neg[k] + h, TV(sub)(zero, TV(load)(P->o[k] + h)));
+            TV(store)(neg[3 + k] + h, TV(sub)(zero, TV(load)(u[k] + h)));
+        }
+    const float *const rows[16] = { P->o[0], P->o[1], P->o[2], u[0], u[1], u[2], neg[0], neg[1], neg[2],
+                                    neg[3], neg[4], neg[5], NULL, NULL, NULL, NULL };
+    float mins[16] __attribute__((aligned(64)));
+    top_pk_mins16(rows, lanes, mins);
+#endif
     for (int k = 0; k < 3; k++) {
+#ifdef SC_TOP_VP
+        const float os = -mins[6 + k] - mins[k], ds = -mins[9 + k] - mins[3 + k];
+#else
         const float os = top_pk_row_max(P->o[k], lanes) - top_pk_row_min(P->o[k], lanes);
         const float ds = top_pk_row_max(u[k], lanes) - top_pk_row_min(u[k], lanes);
+#endif
         P->ospread = os > P->ospread ? os : P->ospread;
         P->dspread = ds > P->dspread ? ds : P->dspread;
         P->o0[k] = P->o[k][f0];
@@ -449,7 +484,9 @@ SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
     }
     if (!top_pk_octant(P, lanes))
         return;
-    /* the extremes over the traced lanes (the others repeat one of them) */
+    /* the extremes over the traced lanes (the others repeat one of them):
+     * the maxima as minima of the negations, 13 reductions at once */
+    TV(t) v[16];
     for (int k = 0; k < 3; k++) {
         TV(t) rlo = TV(load)(P->rd[k]), rhi = rlo, on = TV(load)(P->ordn[k]), of = TV(load)(P->ordf[k]);
         for (unsigned h = VW; h < 16; h += VW) {
@@ -457,13 +494,22 @@ SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
             rlo = TV(min)(rlo, r), rhi = TV(max)(rhi, r);
             on = TV(max)(on, TV(load)(P->ordn[k] + h)), of = TV(min)(of, TV(load)(P->ordf[k] + h));
         }
-        P->fr_rdmin[k] = TV(hmin)(rlo), P->fr_rdmax[k] = -TV(hmin)(TV(sub)(zero, rhi));
-        P->fr_onmax[k] = -TV(hmin)(TV(sub)(zero, on)), P->fr_ofmin[k] = TV(hmin)(of);
+        v[k] = rlo, v[3 + k] = TV(sub)(zero, rhi), v[6 + k] = TV(sub)(zero, on), v[9 + k] = of;
     }
     TV(t) tm = TV(load)(P->tmin);
     for (unsigned h = VW; h < 16; h += VW)
         tm = TV(min)(tm, TV(load)(P->tmin + h));
-    P->fr_tmin = TV(hmin)(tm);
+    v[12] = tm;
+    for (int i = 13; i < 16; i++)
+        v[i] = TV(set1)(INFINITY);
+    float mins[16] __attribute__((aligned(64)));
+    TV(store)(mins, TV(hmin8)(v));
+    TV(store)(mins + 8, TV(hmin8)(v + 8));
+    for (int k = 0; k < 3; k++) {
+        P->fr_rdmin[k] = mins[k], P->fr_rdmax[k] = -mins[3 + k];
+        P->fr_onmax[k] = -mins[6 + k], P->fr_ofmin[k] = mins[9 + k];
+    }
+    P->fr_tmin = mins[12];
 }
 
 /* The frustum test of a uniform packet against the node's 8 children (the
