@@ -16,10 +16,16 @@
  *
  *   bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R]
  *               [--refits K] [--threads T] [--min-time S] [--rows LIST]
+ *               [--identity] [--plain]
  * Each timed row runs its ray set until the faster tracer has run S
  * seconds (default 0.2), the same number of passes for both. --rows
  * (comma-separated row names, e.g. primary16) times only those rows of
- * the instancing table: a profile of one path. */
+ * the instancing table: a profile of one path. --identity makes every
+ * instance's transform a translation to its grid point (no rotation or
+ * scale); --plain traces the mesh itself in both tracers' world scenes
+ * instead of instances, with the rays of one instance. What the instance
+ * level costs each tracer is then --instances 1 --identity against
+ * --plain: the same geometry and the same rays, with and without it. */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
 #include <getopt.h>
@@ -46,6 +52,7 @@ static double min_time = 0.2;
 static const char *const row_names[] = { "primary", "shadow", "diffuse", "primary16", "shadow16", "diffuse16" };
 enum { ROW_COUNT = sizeof row_names / sizeof row_names[0] };
 static unsigned rows_wanted = (1u << ROW_COUNT) - 1;
+static int identity_xfm, plain_mesh;   /* --identity, --plain */
 /* Our builds and refits: the default configuration on --threads threads. */
 static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
@@ -359,6 +366,8 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
             ax[k] /= al;
         double ang = sc_rng_range(&rng, 0, 6.283185307179586), cs = cos(ang), sn = sin(ang), C = 1 - cs;
         double sc = sc_rng_range(&rng, 0.6, 0.8);
+        if (identity_xfm)
+            sc = 1, ang = 0, cs = 1, sn = 0, C = 0;
         double R[3][3] = { { cs + ax[0] * ax[0] * C, ax[0] * ax[1] * C - ax[2] * sn, ax[0] * ax[2] * C + ax[1] * sn },
                            { ax[1] * ax[0] * C + ax[2] * sn, cs + ax[1] * ax[1] * C, ax[1] * ax[2] * C - ax[0] * sn },
                            { ax[2] * ax[0] * C - ax[1] * sn, ax[2] * ax[1] * C + ax[0] * sn, cs + ax[2] * ax[2] * C } };
@@ -378,7 +387,9 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
         sc_accel_commit(obj) != SC_OK || sc_accel_new(&build_cfg, &world) != SC_OK)
         die("spherecull scene failed");
     const double ours_obj = sc_now_seconds() - t0;
-    for (int i = 0; i < ninst; i++)
+    if (plain_mesh && sc_accel_attach_mesh(world, mesh, SC_ACCEL_SHARED, NULL) != SC_OK)
+        die("mesh refused");
+    for (int i = 0; i < ninst && !plain_mesh; i++)
         if (sc_accel_attach_instance(world, obj, xfm[i], NULL) != SC_OK)
             die("instance refused");
     if (sc_accel_commit(world) != SC_OK)
@@ -393,8 +404,8 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
     RTCScene eobj = embree_mesh_scene(dev, mesh, RTC_BUILD_QUALITY_MEDIUM, NULL);
     rtcCommitScene(eobj);
     const double embree_obj = sc_now_seconds() - t0;
-    RTCScene eworld = rtcNewScene(dev);
-    for (int i = 0; i < ninst; i++) {
+    RTCScene eworld = plain_mesh ? embree_mesh_scene(dev, mesh, RTC_BUILD_QUALITY_MEDIUM, NULL) : rtcNewScene(dev);
+    for (int i = 0; i < ninst && !plain_mesh; i++) {
         RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
         rtcSetGeometryInstancedScene(g, eobj);
         rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm[i]);
@@ -406,8 +417,12 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
     double embree_build = sc_now_seconds() - t0;
     long long eb = atomic_load(&embree_bytes);
     const double tris = (double)ninst * mesh->triangle_count;
-    printf("\ninstancing: %d instances of %zu triangles (%.3g triangles), one shared tree\n", ninst,
-           mesh->triangle_count, tris);
+    if (plain_mesh)
+        printf("\ninstancing: none (--plain), the mesh of %zu triangles itself, the rays of one instance\n",
+               mesh->triangle_count);
+    else
+        printf("\ninstancing: %d instances of %zu triangles (%.3g triangles), one shared tree%s\n", ninst,
+               mesh->triangle_count, tris, identity_xfm ? ", translations only (--identity)" : "");
     printf("%-22s %12s %12s %9s\n", "", "spherecull", "embree", "ratio");
     printf("%-22s %12.4f %12.4f %8.3fx\n", "build seconds", ours_build, embree_build, embree_build / ours_build);
     printf("%-22s %12.4f %12.4f %8.3fx\n", "  of which the mesh", ours_obj, embree_obj, embree_obj / ours_obj);
@@ -419,6 +434,10 @@ static void instancing(const sc_mesh_view *mesh, int ninst, int w, int h, int re
     float wlo[3] = { INFINITY, INFINITY, INFINITY }, whi[3] = { -INFINITY, -INFINITY, -INFINITY };
     for (int k = 0; k < 3; k++)
         wlo[k] = (float)(-0.5 * ext), whi[k] = (float)((side - 0.5) * ext);
+    /* the plain mesh is where it is, an instance's centre at the origin */
+    if (plain_mesh)
+        for (int k = 0; k < 3; k++)
+            wlo[k] = (float)(c[k] - 0.5 * ext), whi[k] = (float)(c[k] + 0.5 * ext);
     make_rays(wlo, whi, w, h, world, &rs);
     printf("%-9s %9s %10s %10s %9s %10s\n", "rays", "count", "ours Mr/s", "embree", "ratio", "same hit");
     time_set("primary", world, eworld, rs.primary, rs.n, 0, repeats);
@@ -567,6 +586,8 @@ int main(int argc, char **argv)
                                           { "threads", required_argument, 0, 't' },
                                           { "min-time", required_argument, 0, 'T' },
                                           { "rows", required_argument, 0, 'R' },
+                                          { "identity", no_argument, 0, 'I' },
+                                          { "plain", no_argument, 0, 'P' },
                                           { 0, 0, 0, 0 } };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -581,6 +602,8 @@ int main(int argc, char **argv)
         case 'k': refits = atoi(optarg); break;
         case 't': threads = atoi(optarg); break;
         case 'T': min_time = atof(optarg); break;
+        case 'I': identity_xfm = 1; break;
+        case 'P': plain_mesh = 1; break;
         case 'R': {
             /* a copy for strtok_r, as the CLI's comma lists */
             char buf[256];
@@ -598,9 +621,11 @@ int main(int argc, char **argv)
                 die("--rows: an empty list");
             break;
         }
-        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST]");
+        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST] [--identity] [--plain]");
         }
     }
+    if (plain_mesh && ninst != 1)
+        die("--plain traces one mesh: give --instances 1");
     if (ninst < 0 || w < 4 || h < 4 || w % 4 || h % 4 || repeats < 1 || refits < 0 || threads < 1 ||
         !(min_time >= 0 && min_time <= 60))
         die("bad option value (the image size in multiples of 4)");
