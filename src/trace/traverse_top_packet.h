@@ -29,9 +29,11 @@
  * at all, or each lane takes the single-ray top kernel. A camera tile seen
  * against 8 large instances of a 100k-triangle mesh passes; the same tile
  * against 1,000 small ones (each a few tiles on screen) fails at the
- * instances, where the packet kernel ran at 0.85x the single rays; a tile's
- * diffuse bounces fail at the root (docs/scenes.md). The answers are the
- * same either way. */
+ * instances, where the packet kernel ran at 0.85x the single rays. A
+ * tile's diffuse bounces pass where they start: inside the scene's box
+ * and inside the item they left, from origins within SC_TOP_PACKET_SPREAD
+ * h of each other (top_pk_narrow), and fail elsewhere (docs/scenes.md).
+ * The answers are the same either way. */
 #include <float.h>
 
 #include "trace_packet.h"
@@ -78,7 +80,12 @@ typedef struct top_pk_entry {
     uint32_t lanes;
 } top_pk_entry;
 
-/* Whether the packet is narrow next to a box of centre c and half diagonal h. */
+/* Whether the packet is narrow next to a box of centre c and half
+ * diagonal h, or starts inside it from origins close together: bounce
+ * rays from a tile's hits on the item itself, which share the item's
+ * nodes around their origins whatever their directions, as the BVHs' own
+ * packets of such rays do (one instance, diffuse packets: 12-15 % faster
+ * than lane by lane; docs/scenes.md). */
 SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
 {
     float D = 0;
@@ -86,6 +93,8 @@ SC_TRAVERSE_INLINE int top_pk_narrow(const top_pk *P, const float c[3], float h)
         const float dk = fabsf(c[k] - P->o0[k]);
         D = dk > D ? dk : D;
     }
+    if (D <= h && P->ospread <= SC_TOP_PACKET_SPREAD * h)
+        return 1;
     return P->ospread + P->dspread * D <= SC_TOP_PACKET_SPREAD * h;
 }
 
@@ -248,17 +257,22 @@ SC_TRAVERSE_INLINE void top_pk_visit(top_pk *P, uint32_t item, uint32_t L)
     if (!ok)
         goto done;
     if (!top_pk_narrow(P, it->center, it->half)) {
+        /* lanes in several octants take the one-body kernels, as
+         * top_packet's lanes traced one by one do (top_closest_walk) */
         const sc_trace_kernels *k = &SC_TOP_TABLE[b->cfg.tri_test];
+        const int inc = !P->uniform;
         for (uint32_t e = ok; e; e &= e - 1) {
             const unsigned l = (unsigned)__builtin_ctz(e);
             const sc_ray r = { { ob[0][l], ob[1][l], ob[2][l] }, ob[3][l], { ob[4][l], ob[5][l], ob[6][l] }, ob[7][l] };
             if (P->any) {
-                if (sp ? k->any_stats(b, &r, sp) : k->any(b, &r))
+                if (sp ? k->any_stats(b, &r, sp) : inc ? k->any_incoherent(b, &r) : k->any(b, &r))
                     top_pk_occluded(P, l);
             } else {
                 sc_hitrec h;
                 if (sp)
                     k->closest_stats(b, &r, &h, sp);
+                else if (inc)
+                    k->closest_incoherent(b, &r, &h);
                 else
                     k->closest(b, &r, &h);
                 top_pk_offer(P, it, b, l, &h);
