@@ -124,42 +124,18 @@ SC_X86_INLINE int PFN(pk_axis)(uint32_t m1, uint32_t m2, unsigned l)
 }
 
 /* The smallest lane of each of v[0..16): out[i] = min of v[i] (no NaN
- * lanes). A transposing tree, each level halving the vectors with one
- * shuffle pair and one min, instead of 16 reductions of one vector each:
- * about 45 operations for 16 lanes where the reductions took about 130,
- * and the frustum's 13 were most of a camera packet's set-up time. */
+ * lanes), with simd_vec.h's transposing reductions: about 45 operations
+ * for 16 lanes where 16 reductions of one vector each took about 130, and
+ * the frustum's 13 were most of a camera packet's set-up time. */
+SC_X86_INLINE void PFN(pk_hmin16)(const pvec v[16], float out[16])
+{
 #if PK == 16
-SC_X86_INLINE void PFN(pk_hmin16)(const pvec v[16], float out[16])
-{
-    __m512 a[8], b[4];
-    /* pairs: per 128-bit chunk, both vectors' lanes 0^2 and 1^3 */
-    for (int i = 0; i < 8; i++)
-        a[i] = _mm512_min_ps(_mm512_unpacklo_ps(v[2 * i], v[2 * i + 1]), _mm512_unpackhi_ps(v[2 * i], v[2 * i + 1]));
-    /* per chunk: the chunk's minimum of four vectors */
-    for (int i = 0; i < 4; i++)
-        b[i] = _mm512_min_ps(_mm512_shuffle_ps(a[2 * i], a[2 * i + 1], 0x44),
-                             _mm512_shuffle_ps(a[2 * i], a[2 * i + 1], 0xee));
-    /* across the chunks: pairs of chunks, then all four */
-    const __m512 c0 = _mm512_min_ps(_mm512_shuffle_f32x4(b[0], b[1], 0x88), _mm512_shuffle_f32x4(b[0], b[1], 0xdd));
-    const __m512 c1 = _mm512_min_ps(_mm512_shuffle_f32x4(b[2], b[3], 0x88), _mm512_shuffle_f32x4(b[2], b[3], 0xdd));
-    _mm512_store_ps(out, _mm512_min_ps(_mm512_shuffle_f32x4(c0, c1, 0x88), _mm512_shuffle_f32x4(c0, c1, 0xdd)));
-}
+    _mm512_store_ps(out, f32x16_hmin16(v));
 #else
-SC_X86_INLINE void PFN(pk_hmin16)(const pvec v[16], float out[16])
-{
-    for (int h = 0; h < 16; h += 8) {
-        __m256 a[4], b[2];
-        for (int i = 0; i < 4; i++)
-            a[i] = _mm256_min_ps(_mm256_unpacklo_ps(v[h + 2 * i], v[h + 2 * i + 1]),
-                                 _mm256_unpackhi_ps(v[h + 2 * i], v[h + 2 * i + 1]));
-        for (int i = 0; i < 2; i++)
-            b[i] = _mm256_min_ps(_mm256_shuffle_ps(a[2 * i], a[2 * i + 1], 0x44),
-                                 _mm256_shuffle_ps(a[2 * i], a[2 * i + 1], 0xee));
-        _mm256_store_ps(out + h, _mm256_min_ps(_mm256_permute2f128_ps(b[0], b[1], 0x20),
-                                               _mm256_permute2f128_ps(b[0], b[1], 0x31)));
-    }
-}
+    _mm256_store_ps(out, f32x8_hmin8(v));
+    _mm256_store_ps(out + 8, f32x8_hmin8(v + 8));
 #endif
+}
 
 /* Per-lane set-up of the traced lanes in vectors: sc_ray_precompute's
  * operations (and sc_shear_axes' choice) lane by lane, so every lane has

@@ -389,19 +389,23 @@ SC_TRAVERSE_INLINE void top_pk_unit_dirs(const top_pk *P, float u[3][16])
 #endif
 
 #ifdef SC_TOP_VP
-/* The minima over the 16 lanes of L of 16 rows (+inf for no lane), in
- * vectors of 8 (TV(hmin8) exists for the 8-lane shape SC_TOP_VP is): the
- * two halves' minimum, then the eight and eight reductions at once. */
-SC_TRAVERSE_INLINE void top_pk_mins16(const float *const rows[16], uint32_t L, float out[16])
+/* out[i] = the smallest lane of v[i], 16 at once (TV(hmin8) exists for
+ * the 8-lane shape SC_TOP_VP is). */
+SC_TRAVERSE_INLINE void top_pk_hmin16(const TV(t) v[16], float out[16])
 {
-    const TV(t) pinf = TV(set1)(INFINITY);
-    const TV(m) m0 = TV(mask_from_bits)(L), m1 = TV(mask_from_bits)(L >> 8);
-    TV(t) v[16];
-    for (int i = 0; i < 16; i++)
-        v[i] = rows[i] ? TV(min)(TV(sel)(m0, TV(load)(rows[i]), pinf), TV(sel)(m1, TV(load)(rows[i] + 8), pinf))
-                       : pinf;
     TV(store)(out, TV(hmin8)(v));
     TV(store)(out + 8, TV(hmin8)(v + 8));
+}
+
+/* The smallest value of a 16-lane row (negated first if neg) over the
+ * lanes of masks m0 (lanes 0-7) and m1 (8-15), in one vector to reduce. */
+SC_TRAVERSE_INLINE TV(t) top_pk_halves_min(const float *row, TV(m) m0, TV(m) m1, int neg)
+{
+    const TV(t) pinf = TV(set1)(INFINITY), zero = TV(set1)(0);
+    TV(t) a = TV(load)(row), b = TV(load)(row + 8);
+    if (neg)
+        a = TV(sub)(zero, a), b = TV(sub)(zero, b);
+    return TV(min)(TV(sel)(m0, a, pinf), TV(sel)(m1, b, pinf));
 }
 #endif
 
@@ -415,17 +419,16 @@ SC_TRAVERSE_INLINE void top_pk_spread(top_pk *P, uint32_t lanes)
     P->ospread = P->dspread = 0;
 #ifdef SC_TOP_VP
     /* the maxima as minima of the negated rows */
-    float neg[6][16] __attribute__((aligned(64)));
-    const TV(t) zero = TV(set1)(0);
-    for (int k = 0; k < 3; k++)
-        for (unsigned h = 0; h < 16; h += TV(N)) {
-            TV(store)(neg[k] + h, TV(sub)(zero, TV(load)(P->o[k] + h)));
-            TV(store)(neg[3 + k] + h, TV(sub)(zero, TV(load)(u[k] + h)));
-        }
-    const float *const rows[16] = { P->o[0], P->o[1], P->o[2], u[0], u[1], u[2], neg[0], neg[1], neg[2],
-                                    neg[3], neg[4], neg[5], NULL, NULL, NULL, NULL };
+    const TV(m) m0 = TV(mask_from_bits)(lanes), m1 = TV(mask_from_bits)(lanes >> 8);
+    TV(t) v[16];
+    for (int k = 0; k < 3; k++) {
+        v[k] = top_pk_halves_min(P->o[k], m0, m1, 0), v[3 + k] = top_pk_halves_min(u[k], m0, m1, 0);
+        v[6 + k] = top_pk_halves_min(P->o[k], m0, m1, 1), v[9 + k] = top_pk_halves_min(u[k], m0, m1, 1);
+    }
+    for (int i = 12; i < 16; i++)
+        v[i] = TV(set1)(INFINITY);
     float mins[16] __attribute__((aligned(64)));
-    top_pk_mins16(rows, lanes, mins);
+    top_pk_hmin16(v, mins);
 #endif
     for (int k = 0; k < 3; k++) {
 #ifdef SC_TOP_VP
@@ -517,8 +520,7 @@ SC_TRAVERSE_INLINE void top_pk_setup(top_pk *P, uint32_t lanes)
     for (int i = 13; i < 16; i++)
         v[i] = TV(set1)(INFINITY);
     float mins[16] __attribute__((aligned(64)));
-    TV(store)(mins, TV(hmin8)(v));
-    TV(store)(mins + 8, TV(hmin8)(v + 8));
+    top_pk_hmin16(v, mins);
     for (int k = 0; k < 3; k++) {
         P->fr_rdmin[k] = mins[k], P->fr_rdmax[k] = -mins[3 + k];
         P->fr_onmax[k] = -mins[6 + k], P->fr_ofmin[k] = mins[9 + k];
