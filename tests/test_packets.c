@@ -1093,6 +1093,163 @@ static void test_exact_ties(void **state)
     tmesh_free(&m);
 }
 
+static sc_bvh *build_quality(const tmesh *m, int leaf, sc_build_quality q)
+{
+    sc_bvh_config cfg;
+    sc_bvh_config_default(&cfg);
+    cfg.leaf_size = leaf;
+    cfg.prefilter = SC_PREFILTER_OFF;
+    cfg.tri_test = SC_TRI_EXACT;
+    cfg.quality = q;
+    sc_bvh *bvh = NULL;
+    assert_int_equal(sc_bvh_build(&(sc_mesh_view){ m->pos, m->nv, m->idx, m->nt, 0, 0 }, &cfg, &bvh), SC_OK);
+    return bvh;
+}
+
+/* Faces stored twice (the same three vertices, rotated or reversed, as in
+ * Sponza): a ray that hits one hits both at exactly the same t, and the
+ * smaller id wins. What the exact test reports for the winner (t, u, v)
+ * must not depend on the order the two were met in, nor on how often one
+ * face is met (the high build cuts large faces into several leaves): every
+ * ISA, leaf size, build quality, the brute-force scan and packets return
+ * the same bits (these rays
+ * differed by an ulp or two in t between brute force and the traversal
+ * when comparing two hits could overwrite the reported values). The ids
+ * are checked against the exact primitives (sc_exact_hit_test,
+ * sc_exact_cmp_t). */
+static void test_exact_duplicates(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    enum { G = 12 };
+    uint32_t v[G + 1][G + 1];
+    sc_rng g;
+    sc_rng_seed(&g, 77);
+    for (int i = 0; i <= G; i++)
+        for (int j = 0; j <= G; j++)
+            v[i][j] = tmesh_vertex(&m, i * 0.3 + 0.01 * sc_rng_uniform(&g), j * 0.3,
+                                   0.02 * sc_rng_uniform(&g));
+    for (int i = 0; i < G; i++)
+        for (int j = 0; j < G; j++) {
+            tmesh_tri(&m, v[i][j], v[i + 1][j], v[i + 1][j + 1]);
+            tmesh_tri(&m, v[i][j], v[i + 1][j + 1], v[i][j + 1]);
+        }
+    const size_t nt = m.nt;
+    for (size_t t = 0; t < nt; t++) {
+        const uint32_t a = m.idx[3 * t], b = m.idx[3 * t + 1], c = m.idx[3 * t + 2];
+        if (t & 1)
+            tmesh_tri(&m, c, b, a);   /* the other side */
+        else
+            tmesh_tri(&m, b, c, a);   /* the same side, rotated */
+    }
+    /* stored once: a large quad under the field and a sliver across it,
+     * which the high build cuts into several leaves, so that one face is
+     * met more than once (by the brute-force scan, or by a ray through
+     * two of its leaves' boxes) */
+    const uint32_t q0 = tmesh_vertex(&m, -1.013, -0.971, -0.0517), q1 = tmesh_vertex(&m, 4.61, -1.03, -0.0731);
+    const uint32_t q2 = tmesh_vertex(&m, 4.587, 4.633, -0.0417), q3 = tmesh_vertex(&m, -0.989, 4.6, -0.0603);
+    tmesh_tri(&m, q0, q1, q2);
+    tmesh_tri(&m, q0, q2, q3);
+    const uint32_t s0 = tmesh_vertex(&m, -0.5, 0.1, 0.011), s1 = tmesh_vertex(&m, 4.1, 3.3, 0.013);
+    const uint32_t s2 = tmesh_vertex(&m, -0.5, 0.9, 0.012);
+    tmesh_tri(&m, s0, s1, s2);
+    enum { NR = 16 * 64 };
+    sc_ray *rays = calloc(NR, sizeof *rays);
+    assert_non_null(rays);
+    /* half from afar, half from just above the surface (1e-5 to 1e-2 over
+     * its highest point): hits so near the origin that the float filter's
+     * bound is wide and the report is recomputed (sc_exact_finish) */
+    for (int r = 0; r < NR; r++) {
+        if (r & 1) {
+            const double o[3] = { sc_rng_range(&g, 0.2, 3.4), sc_rng_range(&g, 0.2, 3.4),
+                                  0.02 + exp(sc_rng_range(&g, log(1e-5), log(1e-2))) };
+            const double d[3] = { sc_rng_range(&g, -0.5, 0.5), sc_rng_range(&g, -0.5, 0.5), -1 };
+            set_ray(&rays[r], o, d, 0.0f, INFINITY);
+        } else {
+            const double o[3] = { sc_rng_range(&g, -1, 4.6), sc_rng_range(&g, -1, 4.6), r & 2 ? 2.5 : -2.0 };
+            const double tx = sc_rng_range(&g, 0.2, 3.4), ty = sc_rng_range(&g, 0.2, 3.4);
+            const double d[3] = { tx - o[0], ty - o[1], 0.01 - o[2] };
+            set_ray(&rays[r], o, d, 0.0f, INFINITY);
+        }
+    }
+    size_t hit = 0;
+    uint32_t *want = malloc(NR * sizeof *want);
+    assert_non_null(want);
+    for (int r = 0; r < NR; r++) {
+        want[r] = SC_HITREC_MISS;
+        float wt[9];
+        for (size_t t = 0; t < m.nt; t++) {
+            float tv[9];
+            for (int c = 0; c < 3; c++)
+                for (int k = 0; k < 3; k++)
+                    tv[3 * c + k] = m.pos[3 * m.idx[3 * t + (size_t)c] + k];
+            if (!sc_exact_hit_test(&rays[r], tv))
+                continue;
+            const int cmp = want[r] == SC_HITREC_MISS ? -1 : sc_exact_cmp_t(&rays[r], tv, wt);
+            if (cmp < 0 || (cmp == 0 && t < want[r])) {
+                want[r] = (uint32_t)t;
+                memcpy(wt, tv, sizeof wt);
+            }
+        }
+        hit += want[r] != SC_HITREC_MISS;
+        assert_true(want[r] == SC_HITREC_MISS || want[r] < nt || want[r] >= 2 * nt);   /* the first copy wins */
+    }
+    assert_true(hit > NR / 2);
+    /* the reference bits: the scalar brute-force scan of a leaf-4 tree */
+    sc_hitrec *ref = malloc(NR * sizeof *ref);
+    assert_non_null(ref);
+    const sc_isa start = sc_isa_active();
+    assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
+    sc_bvh *b4 = build_quality(&m, 4, SC_BUILD_QUALITY_MEDIUM);
+    for (int r = 0; r < NR; r++) {
+        assert_int_equal(sc_trace_closest_brute(b4, &rays[r], &ref[r]), SC_OK);
+        assert_int_equal(ref[r].prim, want[r]);
+    }
+    sc_bvh_free(b4);
+    sc_ray_packet16 *p16 = aligned_alloc(64, sizeof *p16);
+    sc_hit_packet16 *h16 = aligned_alloc(64, sizeof *h16);
+    assert_non_null(p16);
+    assert_non_null(h16);
+    _Alignas(64) int32_t valid[16];
+    for (int i = 0; i < 16; i++)
+        valid[i] = -1;
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        for (int run = 0; run < 6; run++) {
+            const int leaf = 4 << (run % 3);
+            const sc_build_quality q = run < 3 ? SC_BUILD_QUALITY_MEDIUM : SC_BUILD_QUALITY_HIGH;
+            sc_bvh *b = build_quality(&m, leaf, q);
+            if (q == SC_BUILD_QUALITY_HIGH)
+                assert_true(b->references > b->triangles);   /* faces cut into several leaves */
+            size_t bad = 0;
+            for (int r = 0; r < NR; r++) {
+                sc_hitrec h, hb;
+                assert_int_equal(sc_trace_closest(b, &rays[r], &h, NULL), SC_OK);
+                assert_int_equal(sc_trace_closest_brute(b, &rays[r], &hb), SC_OK);
+                bad += !(h.prim == ref[r].prim && same_bits(h.t, ref[r].t) && same_bits(h.u, ref[r].u) &&
+                         same_bits(h.v, ref[r].v));
+                bad += !(hb.prim == ref[r].prim && same_bits(hb.t, ref[r].t) && same_bits(hb.u, ref[r].u) &&
+                         same_bits(hb.v, ref[r].v));
+            }
+            for (int r0 = 0; r0 < NR; r0 += 16) {
+                to_packet16(&rays[r0], p16);
+                assert_int_equal(sc_trace_closest16(b, valid, p16, h16, NULL), SC_OK);
+                for (int i = 0; i < 16; i++)
+                    bad += !SAME_LANE(h16, i, ref[r0 + i]);
+            }
+            if (bad)
+                fail_msg("isa %s leaf %d %s build: %zu answers differ from the scalar brute-force scan's bits",
+                         sc_isa_name((sc_isa)isa), leaf, q == SC_BUILD_QUALITY_HIGH ? "high" : "medium", bad);
+            sc_bvh_free(b);
+        }
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    free(p16), free(h16), free(ref), free(want), free(rays);
+    tmesh_free(&m);
+}
+
 /* Every level visits the same nodes and leaves as the scalar kernel, in the
  * same order: the counters of closest-hit traversals (which cull by the
  * best t so far, so the order of the leaves shows in them) must be equal.
@@ -1163,6 +1320,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_api),
+        cmocka_unit_test(test_exact_duplicates),
         cmocka_unit_test(test_other_tests),
         cmocka_unit_test(test_streams),
         cmocka_unit_test(test_streams_incoherent),

@@ -108,7 +108,7 @@ SC_TRAVERSE_INLINE int leaf_visit(const sc_bvh *bvh, const trace_ctx *ctx, const
                     xb->have = 1, xb->refined = 0;
                     xb->prim = sc_leaf_prims(rows, W)[i];
                     xb->rows = rows, xb->W = W, xb->lane = i;
-                    xb->lo = lo, xb->hi = hi;
+                    xb->lo = xb->rlo = lo, xb->hi = xb->rhi = hi;
                     xb->t = t[i], xb->u = un[i] * den[i], xb->v = vn[i] * den[i];
                     tmax = hi;
                 }

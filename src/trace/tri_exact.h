@@ -31,7 +31,13 @@
 #include "spherecull/sc_prefilter.h"
 #include "tri_watertight.h"
 
-/* One accepted hit, or the current closest. lo <= exact t <= hi always. */
+/* One accepted hit, or the current closest. lo <= exact t <= hi always.
+ * What is reported (t, u, v, and whether sc_exact_finish recomputes them
+ * within [rlo, rhi]) is fixed when the hit is accepted, from the ray and
+ * the triangle alone: comparisons with other hits only tighten lo and hi.
+ * So a hit's reported values do not depend on which hits it met first, and
+ * every traversal order (leaf sizes, ISAs, brute force) reports the same
+ * bits. */
 typedef struct sc_exact_hit {
     int have;
     int refined;            /* lo, hi come from the double filter (tighter) */
@@ -39,6 +45,7 @@ typedef struct sc_exact_hit {
     const float *rows;      /* the triangle: lane `lane` of a leaf block of width W */
     unsigned W, lane;
     float lo, hi;
+    float rlo, rhi;         /* lo, hi when accepted: the report's bounds */
     float t, u, v;          /* reported: t (in [tmin, tmax]) and barycentrics */
 } sc_exact_hit;
 
@@ -102,11 +109,11 @@ __attribute__((cold)) unsigned sc_exact_resolve(const sc_ray *r, const float *ro
  * ray grazes the triangle (wide [lo, hi]); then the reported t, u, v are
  * recomputed in double. Called once per ray on the final closest hit. */
 __attribute__((cold)) void sc_exact_report(const sc_ray *r, sc_exact_hit *best);
-/* [lo, hi] wider than this times |t|: recomputed */
+/* [rlo, rhi] wider than this times |t|: recomputed */
 #define SC_EXACT_REPORT_WIDTH 0x1p-12f
 static inline void sc_exact_finish(const sc_ray *r, sc_exact_hit *best)
 {
-    if (best->have && !(best->hi - best->lo <= SC_EXACT_REPORT_WIDTH * fabsf(best->t)))
+    if (best->have && !(best->rhi - best->rlo <= SC_EXACT_REPORT_WIDTH * fabsf(best->t)))
         sc_exact_report(r, best);
 }
 
