@@ -134,14 +134,14 @@ static void test_packets_match_single_rays(void **state)
                             SC_EMBREE_QUALITY_MEDIUM);
         assert_int_equal(sc_embree_intersect1(e, rays, N, h1, NULL), SC_OK);
         for (int w = 8; w <= 16; w += 8) {
-            assert_int_equal(sc_embree_intersect_packets(e, w, rays, N, hp, NULL), SC_OK);
+            assert_int_equal(sc_embree_intersect_packets(e, w, rays, N, hp, w == 8, NULL), SC_OK);
             for (size_t i = 0; i < N; i++) {
                 assert_int_equal(hp[i].prim, target[i]);
                 assert_int_equal(h1[i].prim, target[i]);
                 assert_true(fabs(hp[i].t - h1[i].t) <= 1e-6 * h1[i].t);
             }
         }
-        assert_int_equal(sc_embree_intersect_packets(e, 4, rays, N, hp, NULL), SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal(sc_embree_intersect_packets(e, 4, rays, N, hp, 1, NULL), SC_ERR_INVALID_ARGUMENT);
         sc_embree_destroy(e);
     }
     free(h1), free(hp), free(rays), free(target);

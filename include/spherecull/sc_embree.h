@@ -136,9 +136,13 @@ SC_API sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n,
                                      sc_embree_counters *counters);
 
 /* rtcIntersect8 / rtcIntersect16 over consecutive groups of width rays (the
- * last group partly valid), marked coherent. width is 8 or 16. */
+ * last group partly valid), with RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+ * (coherent != 0: camera tiles, shadow rays to one light) or _INCOHERENT
+ * (bounce and random rays), as an application tells Embree: the flag sets
+ * how soon its hybrid traversal leaves a thinning packet for single rays
+ * (at 2 active rays of 16, or at 14). width is 8 or 16. */
 SC_API sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
-                                             sc_hitrec *hits, sc_embree_counters *counters);
+                                             sc_hitrec *hits, int coherent, sc_embree_counters *counters);
 /* rtcIntersect1M / rtcOccluded1M (Embree's streams) over the rays in chunks
  * of 256, with RTC_INTERSECT_CONTEXT_FLAG_COHERENT (coherent != 0) or
  * _INCOHERENT. */
@@ -149,7 +153,7 @@ SC_API sc_status sc_embree_occluded_stream(sc_embree *e, const sc_ray *rays, siz
 
 /* rtcOccluded8 / rtcOccluded16 likewise. */
 SC_API sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
-                                            sc_embree_counters *counters);
+                                            int coherent, sc_embree_counters *counters);
 
 #ifdef __cplusplus
 }

@@ -409,7 +409,7 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
         const sc_tracer *t = &r->tr[ti];
         sc_tracer_counters ctr;
         memset(&ctr, 0, sizeof ctr);
-        /* Embree's stream gets its coherence flag from the ray set */
+        /* Embree's streams and packets get their coherence flag from the ray set */
         r->tr[ti].incoherent = k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM;
         r->tr[ti].ftz = opt->ftz;
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);

@@ -502,11 +502,11 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
     else if (t->def.packet == SC_TRACER_STREAM)
         st = sc_embree_intersect_stream(t->handle, rays, n, hits, !t->incoherent, ecp);
     else if (occ && t->def.packet)
-        st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, ecp);
+        st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, !t->incoherent, ecp);
     else if (occ)
         st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);
     else if (t->def.packet)
-        st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, ecp);
+        st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, !t->incoherent, ecp);
     else
         st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
     const embree_map *map = t->aux;

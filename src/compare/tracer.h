@@ -46,7 +46,7 @@ typedef struct sc_tracer {
     int prefilter;           /* reports sphere tests */
     int counted;             /* reports triangle tests */
     int fp_exact;            /* false positives are counted exactly */
-    int incoherent;          /* Embree's stream flag for the next runs: the rays are
+    int incoherent;          /* Embree's stream and packet flag for the next runs: the rays are
                               * incoherent (diffuse, random); set by the caller */
     int ftz;                 /* sc_tracer_run_threads sets MXCSR flush-to-zero and
                               * denormals-are-zero in every thread it runs this tracer

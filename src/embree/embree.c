@@ -729,12 +729,12 @@ sc_status sc_embree_occluded1(sc_embree *e, const sc_ray *rays, size_t n, uint8_
     }
 
 sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *rays, size_t n,
-                                      sc_hitrec *hits, sc_embree_counters *ctr)
+                                      sc_hitrec *hits, int coherent, sc_embree_counters *ctr)
 {
     if (!e || (width != 8 && width != 16) || (n && (!rays || !hits)))
         return SC_ERR_INVALID_ARGUMENT;
     ctx_ext c;
-    ctx_init(&c, ctr, 1);
+    ctx_init(&c, ctr, coherent);
     if (width == 8) {
         PACKET_LOOP(8)
     } else {
@@ -764,12 +764,12 @@ sc_status sc_embree_intersect_packets(sc_embree *e, int width, const sc_ray *ray
     }
 
 sc_status sc_embree_occluded_packets(sc_embree *e, int width, const sc_ray *rays, size_t n, uint8_t *occluded,
-                                     sc_embree_counters *ctr)
+                                     int coherent, sc_embree_counters *ctr)
 {
     if (!e || (width != 8 && width != 16) || (n && (!rays || !occluded)))
         return SC_ERR_INVALID_ARGUMENT;
     ctx_ext c;
-    ctx_init(&c, ctr, 1);
+    ctx_init(&c, ctr, coherent);
     if (width == 8) {
         OCCLUDED_LOOP(8)
     } else {
