@@ -122,12 +122,53 @@ int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigne
     return sc_kernels_active()->trace[0].packet_valid(valid, rows, W);
 }
 
+static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi);
+
+/* Lane l of a packet's rows as a ray. */
+static sc_ray packet_ray(const float *rows, unsigned W, unsigned l)
+{
+    return (sc_ray){ { rows[l], rows[W + l], rows[2 * W + l] }, rows[3 * W + l],
+                     { rows[4 * W + l], rows[5 * W + l], rows[6 * W + l] }, rows[7 * W + l] };
+}
+
+/* A packet whose first and last lanes already differ in origin and in
+ * direction more than a stream's coherent run may (pair_incoherent):
+ * random rays, bounce rays from scattered hits. Its lanes take the
+ * single-ray kernels without the octant branch, as a stream's incoherent
+ * rays do; the packet kernel ran such packets at 0.65-0.89x the single
+ * rays (docs/compare.md, thirty-seventh session), where Embree's hybrid
+ * kernel, told the rays are incoherent, leaves a packet for single rays
+ * as soon as two of its 16 lanes are done. The answers are the same. */
+static int packet_incoherent(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W)
+{
+    if (!lanes || !bvh->has_root)
+        return 0;
+    const sc_ray a = packet_ray(rows, W, (unsigned)__builtin_ctz(lanes));
+    const sc_ray b = packet_ray(rows, W, 31u - (unsigned)__builtin_clz(lanes));
+    return pair_incoherent(&a, &b, bvh->root_lo, bvh->root_hi);
+}
+
 static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const float *rows, unsigned W, void *out,
                               int any, sc_trace_stats *stats)
 {
     const int64_t lanes = bvh ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
     if (lanes < 0)
         return SC_ERR_INVALID_ARGUMENT;
+    if (!stats && packet_incoherent(bvh, (uint32_t)lanes, rows, W)) {
+        const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+        for (uint32_t e = (uint32_t)lanes; e; e &= e - 1) {
+            const unsigned i = (unsigned)__builtin_ctz(e);
+            const sc_ray r = packet_ray(rows, W, i);
+            if (any) {
+                ((int32_t *)out)[i] = k->any_incoherent(bvh, &r);
+            } else {
+                sc_hitrec h;
+                k->closest_incoherent(bvh, &r, &h);
+                sc_hit_lane_put(out, W, i, &h);
+            }
+        }
+        return SC_OK;
+    }
     sc_trace_packet_lanes(bvh, (uint32_t)lanes, rows, W, out, any, stats);
     return SC_OK;
 }
