@@ -241,9 +241,9 @@ static double run_ours16(const sc_accel *a, const sc_ray *rays, size_t n, int sh
 
 /* Embree's default context (incoherent) for every row, its faster choice
  * through instances: with RTC_INTERSECT_CONTEXT_FLAG_COHERENT its camera
- * packets through 1,000 instances ran at half the speed (2.36 against 4.69
- * Mrays/s), and rtcOccluded16 did not return on their shadow rays (Embree
- * 3.13.5, as on orchard.json's in compare; docs/scenes.md). */
+ * packets through 1,000 instances ran at half the speed, and rtcOccluded16
+ * did not return on their shadow rays (Embree 3.13.5, as on orchard.json's
+ * in compare; docs/compare.md, thirty-seventh session). */
 static double run_embree16(RTCScene scene, const sc_ray *rays, size_t n, int shadow, result *out)
 {
     struct RTCIntersectContext ctx;
