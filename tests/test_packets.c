@@ -1008,6 +1008,33 @@ static void test_shear_ties(void **state)
     tmesh_free(&m);
 }
 
+
+/* The first hit of ray r on mesh m by brute force with the exact
+ * primitives (sc_exact_hit_test, sc_exact_cmp_t), not the traversal: the
+ * smallest id at the nearest exact t, or SC_HITREC_MISS. Adds the
+ * triangles hit to *hits and those at exactly the same t as the nearest
+ * so far to *ties. */
+static uint32_t exact_nearest(const tmesh *m, const sc_ray *r, size_t *hits, size_t *ties)
+{
+    uint32_t want = SC_HITREC_MISS;
+    float wt[9];
+    for (size_t t = 0; t < m->nt; t++) {
+        float tv[9];
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < 3; k++)
+                tv[3 * c + k] = m->pos[3 * m->idx[3 * t + (size_t)c] + k];
+        if (!sc_exact_hit_test(r, tv))
+            continue;
+        ++*hits;
+        const int cmp = want == SC_HITREC_MISS ? -1 : sc_exact_cmp_t(r, tv, wt);
+        *ties += cmp == 0;
+        if (cmp < 0 || (cmp == 0 && t < want)) {
+            want = (uint32_t)t;
+            memcpy(wt, tv, sizeof wt);
+        }
+    }
+    return want;
+}
 /* Rays through vertices shared by several triangles: those triangles are
  * hit at exactly the same t, and every kernel must then report the smallest
  * primitive id, whatever order it visits the leaves in. The expected id is
@@ -1049,26 +1076,8 @@ static void test_exact_ties(void **state)
     uint32_t want[NR];
     size_t ties = 0;
     for (int r = 0; r < NR; r++) {
-        want[r] = SC_HITREC_MISS;
-        float wt[9];
-        int hits = 0;
-        for (size_t t = 0; t < m.nt; t++) {
-            float tv[9];
-            for (int c = 0; c < 3; c++)
-                for (int k = 0; k < 3; k++)
-                    tv[3 * c + k] = m.pos[3 * m.idx[3 * t + (size_t)c] + k];
-            if (!sc_exact_hit_test(&rays[r], tv))
-                continue;
-            hits++;
-            const int cmp = want[r] == SC_HITREC_MISS ? -1 : sc_exact_cmp_t(&rays[r], tv, wt);
-            if (cmp < 0 || (cmp == 0 && t < want[r])) {
-                ties += cmp == 0;
-                want[r] = (uint32_t)t;
-                memcpy(wt, tv, sizeof wt);
-            } else {
-                ties += cmp == 0;
-            }
-        }
+        size_t hits = 0;
+        want[r] = exact_nearest(&m, &rays[r], &hits, &ties);
         assert_true(hits >= 1);
     }
     assert_true(ties > (size_t)NR);   /* most rays meet a fan of several triangles at one t */
@@ -1176,21 +1185,8 @@ static void test_exact_duplicates(void **state)
     uint32_t *want = malloc(NR * sizeof *want);
     assert_non_null(want);
     for (int r = 0; r < NR; r++) {
-        want[r] = SC_HITREC_MISS;
-        float wt[9];
-        for (size_t t = 0; t < m.nt; t++) {
-            float tv[9];
-            for (int c = 0; c < 3; c++)
-                for (int k = 0; k < 3; k++)
-                    tv[3 * c + k] = m.pos[3 * m.idx[3 * t + (size_t)c] + k];
-            if (!sc_exact_hit_test(&rays[r], tv))
-                continue;
-            const int cmp = want[r] == SC_HITREC_MISS ? -1 : sc_exact_cmp_t(&rays[r], tv, wt);
-            if (cmp < 0 || (cmp == 0 && t < want[r])) {
-                want[r] = (uint32_t)t;
-                memcpy(wt, tv, sizeof wt);
-            }
-        }
+        size_t hits = 0, ties = 0;
+        want[r] = exact_nearest(&m, &rays[r], &hits, &ties);
         hit += want[r] != SC_HITREC_MISS;
         assert_true(want[r] == SC_HITREC_MISS || want[r] < nt || want[r] >= 2 * nt);   /* the first copy wins */
     }

@@ -40,6 +40,53 @@ sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded, sc_t
 
 static int aligned_to(const void *p, uintptr_t a) { return ((uintptr_t)p & (a - 1)) == 0; }
 
+/* A quick "no" before the gather: the first and the last ray of a run
+ * (opposite corners of a pixel tile) already differ more in direction and
+ * in origin than a coherent run may. Random rays leave here. */
+static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi)
+{
+    float la = fabsf(a->dir[0]) + fabsf(a->dir[1]) + fabsf(a->dir[2]);
+    float lb = fabsf(b->dir[0]) + fabsf(b->dir[1]) + fabsf(b->dir[2]);
+    int dir_far = 0, org_far = 0;
+    for (int k = 0; k < 3; k++) {
+        dir_far |= fabsf(a->dir[k] * lb - b->dir[k] * la) > SC_STREAM_SPREAD * la * lb;
+        org_far |= fabsf(a->org[k] - b->org[k]) > SC_STREAM_ORIGINS * (hi[k] - lo[k]);
+    }
+    return dir_far && org_far;
+}
+
+/* Lane l of a packet's rows as a ray. */
+static sc_ray packet_ray(const float *rows, unsigned W, unsigned l)
+{
+    return (sc_ray){ { rows[l], rows[W + l], rows[2 * W + l] }, rows[3 * W + l],
+                     { rows[4 * W + l], rows[5 * W + l], rows[6 * W + l] }, rows[7 * W + l] };
+}
+
+/* Lanes `lanes` of a packet one by one through the single-ray kernels:
+ * those without the octant branch when the rays are incoherent. */
+static void packet_lanes_single(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W, void *out, int any,
+                                sc_trace_stats *stats, int incoherent)
+{
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    for (uint32_t e = lanes; e; e &= e - 1) {
+        const unsigned i = (unsigned)__builtin_ctz(e);
+        const sc_ray r = packet_ray(rows, W, i);
+        if (any) {
+            ((int32_t *)out)[i] = stats ? k->any_stats(bvh, &r, stats)
+                                        : incoherent ? k->any_incoherent(bvh, &r) : k->any(bvh, &r);
+            continue;
+        }
+        sc_hitrec h;
+        if (stats)
+            k->closest_stats(bvh, &r, &h, stats);
+        else if (incoherent)
+            k->closest_incoherent(bvh, &r, &h);
+        else
+            k->closest(bvh, &r, &h);
+        sc_hit_lane_put(out, W, i, &h);
+    }
+}
+
 /* One body for the four packet calls. rays: the packet's rows (ox oy oz
  * tmin dx dy dz tmax, W floats each); out: the hit packet (closest) or the
  * int32_t occlusion array (any). The level's kernel of that width; a
@@ -97,21 +144,7 @@ void sc_trace_packet_lanes(const sc_bvh *bvh, uint32_t lanes, const float *rows,
         }
         return;
     }
-    for (uint32_t e = lanes; e; e &= e - 1) {
-        const unsigned i = (unsigned)__builtin_ctz(e);
-        const sc_ray r = { { rows[i], rows[W + i], rows[2 * W + i] }, rows[3 * W + i],
-                           { rows[4 * W + i], rows[5 * W + i], rows[6 * W + i] }, rows[7 * W + i] };
-        if (any) {
-            ((int32_t *)out)[i] = stats ? k->any_stats(bvh, &r, stats) : k->any(bvh, &r);
-            continue;
-        }
-        sc_hitrec h;
-        if (stats)
-            k->closest_stats(bvh, &r, &h, stats);
-        else
-            k->closest(bvh, &r, &h);
-        sc_hit_lane_put(out, W, i, &h);
-    }
+    packet_lanes_single(bvh, lanes, rows, W, out, any, stats, 0);
 }
 
 int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigned W, const void *out, int any)
@@ -122,21 +155,12 @@ int64_t sc_packet_checked_lanes(const int32_t *valid, const float *rows, unsigne
     return sc_kernels_active()->trace[0].packet_valid(valid, rows, W);
 }
 
-static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi);
-
-/* Lane l of a packet's rows as a ray. */
-static sc_ray packet_ray(const float *rows, unsigned W, unsigned l)
-{
-    return (sc_ray){ { rows[l], rows[W + l], rows[2 * W + l] }, rows[3 * W + l],
-                     { rows[4 * W + l], rows[5 * W + l], rows[6 * W + l] }, rows[7 * W + l] };
-}
-
 /* A packet whose first and last lanes already differ in origin and in
  * direction more than a stream's coherent run may (pair_incoherent):
  * random rays, bounce rays from scattered hits. Its lanes take the
  * single-ray kernels without the octant branch, as a stream's incoherent
- * rays do; the packet kernel ran such packets at 0.65-0.89x the single
- * rays (docs/compare.md, thirty-seventh session), where Embree's hybrid
+ * rays do; the packet kernel ran such packets slower than the single rays
+ * (docs/compare.md, thirty-seventh session), where Embree's hybrid
  * kernel, told the rays are incoherent, leaves a packet for single rays
  * as soon as two of its 16 lanes are done. The answers are the same. */
 static int packet_incoherent(const sc_bvh *bvh, uint32_t lanes, const float *rows, unsigned W)
@@ -154,22 +178,10 @@ static sc_status trace_packet(const sc_bvh *bvh, const int32_t *valid, const flo
     const int64_t lanes = bvh ? sc_packet_checked_lanes(valid, rows, W, out, any) : -1;
     if (lanes < 0)
         return SC_ERR_INVALID_ARGUMENT;
-    if (!stats && packet_incoherent(bvh, (uint32_t)lanes, rows, W)) {
-        const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
-        for (uint32_t e = (uint32_t)lanes; e; e &= e - 1) {
-            const unsigned i = (unsigned)__builtin_ctz(e);
-            const sc_ray r = packet_ray(rows, W, i);
-            if (any) {
-                ((int32_t *)out)[i] = k->any_incoherent(bvh, &r);
-            } else {
-                sc_hitrec h;
-                k->closest_incoherent(bvh, &r, &h);
-                sc_hit_lane_put(out, W, i, &h);
-            }
-        }
-        return SC_OK;
-    }
-    sc_trace_packet_lanes(bvh, (uint32_t)lanes, rows, W, out, any, stats);
+    if (!stats && packet_incoherent(bvh, (uint32_t)lanes, rows, W))
+        packet_lanes_single(bvh, (uint32_t)lanes, rows, W, out, any, NULL, 1);
+    else
+        sc_trace_packet_lanes(bvh, (uint32_t)lanes, rows, W, out, any, stats);
     return SC_OK;
 }
 
@@ -230,21 +242,6 @@ static void hit_rows_to_records(const sc_hit_packet16 *h, unsigned cnt, char *ou
      * writes as an sc_hitrec too) */
     for (; i < cnt; i++)
         sc_hit_lane_get(h, 16, i, (sc_hitrec *)(void *)(out + i * out_stride));
-}
-
-/* A quick "no" before the gather: the first and the last ray of a run
- * (opposite corners of a pixel tile) already differ more in direction and
- * in origin than a coherent run may. Random rays leave here. */
-static int pair_incoherent(const sc_ray *a, const sc_ray *b, const float *lo, const float *hi)
-{
-    float la = fabsf(a->dir[0]) + fabsf(a->dir[1]) + fabsf(a->dir[2]);
-    float lb = fabsf(b->dir[0]) + fabsf(b->dir[1]) + fabsf(b->dir[2]);
-    int dir_far = 0, org_far = 0;
-    for (int k = 0; k < 3; k++) {
-        dir_far |= fabsf(a->dir[k] * lb - b->dir[k] * la) > SC_STREAM_SPREAD * la * lb;
-        org_far |= fabsf(a->org[k] - b->org[k]) > SC_STREAM_ORIGINS * (hi[k] - lo[k]);
-    }
-    return dir_far && org_far;
 }
 
 /* The incoherent rays of a stream waiting for the target's batch kernel:

@@ -571,8 +571,8 @@ static void refine_bounds(const sc_ray *r, sc_exact_hit *c)
  * were hit, so neither is degenerate and three matches make the sets
  * equal. A face stored twice (once a side, or a copy) is common in
  * architectural models: on Sponza nearly every exact comparison of two
- * hits' t is such a pair (8,694 of 8,715 on 65,536 random rays), each about
- * 20,000 instructions of integer arithmetic for a tie known in 30. */
+ * hits' t is such a pair (docs/compare.md, thirty-seventh session), each
+ * a tie that the integer arithmetic would take ~20,000 instructions to find. */
 static int same_face(const float a[9], const float b[9])
 {
     for (int i = 0; i < 3; i++) {
