@@ -14,6 +14,6 @@ $sc render scenes/bunny.json -o out/bunny.png "$@"
 echo "wrote out/bunny.png"
 echo
 $sc compare scenes/bunny.json \
-    --tracers spherecull-off,spherecull-exact,spherecull-minimal,spherecull-p16,embree,embree-high,embree-robust,embree-p16,embree-user-prefilter \
+    --tracers spherecull-off,spherecull-exact,spherecull-minimal,spherecull-p16,embree,embree-high,embree-robust,embree-p16,embree-p16-coherent,embree-p16-incoherent,embree-user-prefilter \
     --threads 1 --repeats 5 --oracle-rays 5000 --csv out/compare.csv
 echo "wrote out/compare.csv"

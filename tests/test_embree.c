@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include "common/sc_rng.h"
+#include "compare/compare.h"
 #include "compare/oracle.h"
 #include "sc_test_checked.h"
 #include "scene/procedural.h"
@@ -263,6 +264,56 @@ static void test_version(void **state)
     assert_int_equal(sc_embree_version(NULL, 8), SC_ERR_INVALID_ARGUMENT);
 }
 
+/* compare's best Embree: every row's best_embree is its speed over the
+ * fastest Embree row of default flags and the same width in the run (the
+ * packets' fixed-flag rows included, the robust build not), and names it. */
+static void test_best_embree(void **state)
+{
+    (void)state;
+    sc_proc_mesh pm;
+    assert_int_equal(sc_proc_icosphere(3, &pm), SC_OK);
+    sc_mesh_view mv = sc_proc_view(&pm);
+    const sc_camera cam = { { 0, 0.5, 3 }, { 0, 0, 0 }, { 0, 1, 0 }, 50, 32, 32 };
+    const sc_light light = { SC_LIGHT_POINT, { 2, 3, 4 }, { 1, 1, 1 } };
+    sc_cmp_options opt;
+    sc_cmp_options_default(&opt);
+    static const char *const names[] = { "spherecull-off", "spherecull-p16", "embree", "embree-high",
+                                         "embree-robust", "embree-p16", "embree-p16-coherent",
+                                         "embree-p16-incoherent", "embree-p8", "spherecull-p8" };
+    enum { NT = sizeof names / sizeof names[0] };
+    for (int i = 0; i < NT; i++)
+        opt.tracers[i] = names[i];
+    opt.ntracers = NT;
+    opt.threads[0] = 1, opt.nthreads = 1;
+    opt.ray_kinds = 1u << SC_RAYS_PRIMARY | 1u << SC_RAYS_SHADOW;
+    opt.oracle_rays = 0, opt.repeats = 1, opt.min_seconds = 0;
+    opt.width = 32;
+    sc_cmp_rows rows = { 0 };
+    char err[256] = "";
+    assert_int_equal(sc_cmp_scene("ico", &mv, NULL, &cam, &light, 1, &opt, &rows, NULL, err, sizeof err), SC_OK);
+    assert_int_equal(rows.count, 2 * NT);
+    for (size_t i = 0; i < rows.count; i++) {
+        const sc_cmp_row *r = &rows.rows[i];
+        const int w = strstr(r->tracer, "-p16") ? 16 : strstr(r->tracer, "-p8") ? 8 : 0;
+        const sc_cmp_row *best = NULL;
+        for (size_t j = 0; j < rows.count; j++) {
+            const sc_cmp_row *o = &rows.rows[j];
+            const int ow = strstr(o->tracer, "-p16") ? 16 : strstr(o->tracer, "-p8") ? 8 : 0;
+            if (o->rays != r->rays || ow != w || strncmp(o->tracer, "embree", 6) ||
+                strcmp(o->tracer, "embree-robust") == 0)
+                continue;
+            if (!best || o->mrays_per_s > best->mrays_per_s)
+                best = o;
+        }
+        assert_non_null(best);
+        assert_string_equal(r->best_embree_tracer, best->tracer);
+        assert_true(fabs(r->best_embree - r->mrays_per_s / best->mrays_per_s) <= 1e-12 * r->best_embree);
+        assert_true(r->mrays_per_s > 0);
+    }
+    sc_cmp_rows_free(&rows);
+    sc_proc_free(&pm);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -271,6 +322,7 @@ int main(void)
         cmocka_unit_test(test_packets_match_single_rays),
         cmocka_unit_test(test_user_prefilter_no_lost_hits),
         cmocka_unit_test(test_memory_and_arguments),
+        cmocka_unit_test(test_best_embree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -340,8 +340,9 @@ static int run(int argc, char **argv)
                "does not stop, grazes = rays whose first exact hit only touches the surface (tangent) and that the tracer\n"
                "does not report (adversarial rows), xEmbree = speed / "
                "embree (rtcIntersect1/rtcOccluded1) at the same threads, packet rows (-p8, -p16) / embree-p8, "
-               "embree-p16, stream rows / embree-stream; xBest = speed / the faster of embree and embree-high (single rays;\n"
-               "packets and streams: as xEmbree), named in the CSV's best_embree_tracer;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
+               "embree-p16 (the ray set's coherence flag), stream rows / embree-stream; xBest = speed / the fastest Embree\n"
+               "row of the same width in the run (single rays: embree, embree-high; packets: also embree-p8/p16-coherent and\n"
+               "-incoherent), named in the CSV's best_embree_tracer;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
                "counted by the prefilter tracers\n(packet rows count ray-triangle and ray-sphere pairs, as single rays do).\n");
     }
     if (rc == 0 && a.csv && sc_cli_write(CMD, a.csv, write_csv_cb, &rows) != 0)

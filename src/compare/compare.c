@@ -13,6 +13,9 @@
 #include "crossing.h"
 #include "oracle.h"
 #include "tracer.h"
+#ifdef SC_HAVE_EMBREE
+#include "spherecull/sc_embree.h"
+#endif
 
 /* ---- rows ----------------------------------------------------------------- */
 
@@ -428,10 +431,25 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
 
 /* Speed against native Embree of the same kind, same set and threads.
  * speed_vs_embree: single rays against rtcIntersect1 / rtcOccluded1
- * ("embree"), packets of 8 and 16 against "embree-p8" and "embree-p16",
- * streams against rtcIntersect1M / rtcOccluded1M ("embree-stream").
- * best_embree: against the faster of that one and, for single rays,
- * "embree-high" (packets and streams have one Embree build quality each). */
+ * ("embree"), packets of 8 and 16 against "embree-p8" and "embree-p16"
+ * (the flag of the ray set), streams against rtcIntersect1M /
+ * rtcOccluded1M ("embree-stream").
+ * best_embree: against the fastest Embree row of its default scene flags
+ * and the same width in the run: for single rays "embree" and
+ * "embree-high", for packets also the rows of one fixed flag
+ * ("embree-p16-coherent", "embree-p16-incoherent"), as a user would pick
+ * Embree's faster build and flag. */
+static int best_candidate(const char *tracer, int width)
+{
+#ifdef SC_HAVE_EMBREE
+    const sc_tracer_def *d = sc_tracer_find(tracer);
+    return d && d->family == SC_TRACER_EMBREE && d->mode == SC_EMBREE_DEFAULT && d->packet == width;
+#else
+    (void)tracer, (void)width;
+    return 0;
+#endif
+}
+
 static void embree_ratios(sc_cmp_rows *out, size_t first_row)
 {
     for (size_t i = first_row; i < out->count; i++) {
@@ -440,16 +458,14 @@ static void embree_ratios(sc_cmp_rows *out, size_t first_row)
         const int w = d ? d->packet : 0;
         const char *ref = w == 8 ? "embree-p8" : w == 16 ? "embree-p16" : w == SC_TRACER_STREAM ? "embree-stream"
                                                                                                   : "embree";
-        const char *high = w == 0 ? "embree-high" : NULL;
         const sc_cmp_row *best = NULL;
         for (size_t j = first_row; j < out->count; j++) {
             const sc_cmp_row *o = &out->rows[j];
             if (o->rays != row->rays || o->threads != row->threads)
                 continue;
-            const int is_ref = strcmp(o->tracer, ref) == 0;
-            if (is_ref)
+            if (strcmp(o->tracer, ref) == 0)
                 row->speed_vs_embree = row->mrays_per_s / o->mrays_per_s;
-            if ((is_ref || (high && strcmp(o->tracer, high) == 0)) && (!best || o->mrays_per_s > best->mrays_per_s))
+            if (best_candidate(o->tracer, w) && (!best || o->mrays_per_s > best->mrays_per_s))
                 best = o;
         }
         if (best) {

@@ -18,33 +18,41 @@
 #endif
 
 static const sc_tracer_def all_tracers[] = {
-    { "spherecull-off", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-exact", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-medium", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_MEDIUM },
-    { "spherecull-high", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_HIGH },
-    { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-p16-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO },
-    { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM, SC_BUILD_QUALITY_AUTO },
+    { "spherecull-off", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-exact", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_EXACT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-medium", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_MEDIUM, 0 },
+    { "spherecull-high", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_HIGH, 0 },
+    { "spherecull-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-auto", SC_TRACER_OURS, SC_PREFILTER_AUTO, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 0, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-p8", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 8, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-p16", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-p16-circum", SC_TRACER_OURS, SC_PREFILTER_CIRCUM, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-p16-minimal", SC_TRACER_OURS, SC_PREFILTER_MINIMAL, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-p16-compact", SC_TRACER_OURS, SC_PREFILTER_COMPACT, SC_TRI_WATERTIGHT, 0, 16, SC_BUILD_QUALITY_AUTO, 0 },
+    { "spherecull-stream", SC_TRACER_OURS, SC_PREFILTER_OFF, SC_TRI_WATERTIGHT, 0, SC_TRACER_STREAM, SC_BUILD_QUALITY_AUTO, 0 },
 #ifdef SC_HAVE_EMBREE
-    { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
-    { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
-    { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0, 0 },
-    { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0, 0 },
-    { "embree-compact", SC_TRACER_EMBREE, SC_EMBREE_COMPACT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0 },
-    { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0 },
-    { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0 },
-    { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM, 0 },
-    { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0 },
-    { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0 },
-    { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0 },
-    { "embree-user-plain16", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0 },
+    { "embree", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0, 0 },
+    { "embree-robust", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0, 0 },
+    { "embree-high", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_HIGH, 0, 0, 0, 0 },
+    { "embree-robust-high", SC_TRACER_EMBREE, SC_EMBREE_ROBUST, SC_EMBREE_QUALITY_HIGH, 0, 0, 0, 0 },
+    { "embree-compact", SC_TRACER_EMBREE, SC_EMBREE_COMPACT, SC_EMBREE_QUALITY_MEDIUM, 0, 0, 0, 0 },
+    { "embree-p8", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0, 0 },
+    { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0, 0 },
+    /* Embree's packets with one flag for every ray set: its faster flag is
+     * not always the one its rays suggest (shadow packets on foliage run
+     * faster incoherent), and the best Embree packet is the faster of these
+     * and embree-p8 / embree-p16 (compare.c) */
+    { "embree-p8-coherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0, SC_TRACER_COHERENT },
+    { "embree-p8-incoherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0, SC_TRACER_INCOHERENT },
+    { "embree-p16-coherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0, SC_TRACER_COHERENT },
+    { "embree-p16-incoherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0, SC_TRACER_INCOHERENT },
+    { "embree-stream", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, SC_TRACER_STREAM, 0, 0 },
+    { "embree-user-prefilter", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0, 0 },
+    { "embree-user-prefilter16", SC_TRACER_EMBREE, SC_EMBREE_USER_PREFILTER, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0, 0 },
+    { "embree-user-plain", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 8, 0, 0, 0 },
+    { "embree-user-plain16", SC_TRACER_EMBREE, SC_EMBREE_USER_PLAIN, SC_EMBREE_QUALITY_MEDIUM, 16, 0, 0, 0 },
 #endif
 };
 enum { NDEFS = sizeof all_tracers / sizeof all_tracers[0] };
@@ -89,7 +97,7 @@ sc_status sc_tracer_build_bvh(sc_tracer *t, const char *name, const sc_bvh_confi
         return SC_ERR_INVALID_ARGUMENT;
     const sc_mesh_view *m = &cm->view;
     memset(t, 0, sizeof *t);
-    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality };
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality, 0 };
     sc_bvh *b;
     sc_status st = sc_bvh_build(m, cfg, &b);
     if (st != SC_OK)
@@ -108,7 +116,7 @@ sc_status sc_tracer_build_scene_bvh(sc_tracer *t, const char *name, const sc_bvh
     if (!t || !cfg || !v)
         return SC_ERR_INVALID_ARGUMENT;
     memset(t, 0, sizeof *t);
-    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality };
+    t->def = (sc_tracer_def){ name, SC_TRACER_OURS, cfg->prefilter, cfg->tri_test, 0, 0, cfg->quality, 0 };
     t->instanced = 1;
     sc_scene_accel *a;
     sc_status st = sc_scene_accel_build(v, cfg, &a);
@@ -496,17 +504,18 @@ static sc_status embree_run(const sc_tracer *t, const sc_ray *rays, size_t n, sc
         memset(&ec, 0, sizeof ec);
         ecp = &ec;
     }
+    const int coherent = t->def.coherence ? t->def.coherence == SC_TRACER_COHERENT : !t->incoherent;
     sc_status st;
     if (t->def.packet == SC_TRACER_STREAM && occ)
-        st = sc_embree_occluded_stream(t->handle, rays, n, occ, !t->incoherent, ecp);
+        st = sc_embree_occluded_stream(t->handle, rays, n, occ, coherent, ecp);
     else if (t->def.packet == SC_TRACER_STREAM)
-        st = sc_embree_intersect_stream(t->handle, rays, n, hits, !t->incoherent, ecp);
+        st = sc_embree_intersect_stream(t->handle, rays, n, hits, coherent, ecp);
     else if (occ && t->def.packet)
-        st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, !t->incoherent, ecp);
+        st = sc_embree_occluded_packets(t->handle, t->def.packet, rays, n, occ, coherent, ecp);
     else if (occ)
         st = sc_embree_occluded1(t->handle, rays, n, occ, ecp);
     else if (t->def.packet)
-        st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, !t->incoherent, ecp);
+        st = sc_embree_intersect_packets(t->handle, t->def.packet, rays, n, hits, coherent, ecp);
     else
         st = sc_embree_intersect1(t->handle, rays, n, hits, ecp);
     const embree_map *map = t->aux;

@@ -17,6 +17,7 @@
 
 enum { SC_TRACER_MAX_THREADS = 256 };
 enum { SC_TRACER_STREAM = 1 };   /* sc_tracer_def.packet: our stream calls */
+enum { SC_TRACER_COHERENT = 1, SC_TRACER_INCOHERENT = 2 };   /* sc_tracer_def.coherence */
 
 typedef enum sc_tracer_family { SC_TRACER_OURS, SC_TRACER_EMBREE } sc_tracer_family;
 
@@ -29,6 +30,8 @@ typedef struct sc_tracer_def {
     int cluster;       /* Embree user modes: triangles per cluster; 0 = default */
     int packet;        /* 0 (single rays), 8 or 16; ours also SC_TRACER_STREAM */
     int build;         /* ours: sc_build_quality */
+    int coherence;     /* Embree packets: 0 = the flag of the ray set (sc_tracer.incoherent),
+                        * else SC_TRACER_COHERENT or SC_TRACER_INCOHERENT whatever the rays */
 } sc_tracer_def;
 
 /* Work counted inside a tracer; Embree counts only in its user modes. */
