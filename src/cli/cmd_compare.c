@@ -341,8 +341,8 @@ static int run(int argc, char **argv)
                "does not report (adversarial rows), xEmbree = speed / "
                "embree (rtcIntersect1/rtcOccluded1) at the same threads, packet rows (-p8, -p16) / embree-p8, "
                "embree-p16 (the ray set's coherence flag), stream rows / embree-stream; xBest = speed / the fastest Embree\n"
-               "row of the same width in the run (single rays: embree, embree-high; packets: also embree-p8/p16-coherent and\n"
-               "-incoherent), named in the CSV's best_embree_tracer;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
+               "row of the same width in the run (single rays: embree, embree-high; packets: also embree-p8/p16-coherent or\n"
+               "-incoherent, the flag the ray set does not get), named in the CSV's best_embree_tracer;\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
                "counted by the prefilter tracers\n(packet rows count ray-triangle and ray-sphere pairs, as single rays do).\n");
     }
     if (rc == 0 && a.csv && sc_cli_write(CMD, a.csv, write_csv_cb, &rows) != 0)

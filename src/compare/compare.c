@@ -44,6 +44,9 @@ void sc_cmp_rows_free(sc_cmp_rows *r)
     memset(r, 0, sizeof *r);
 }
 
+/* The ray sets Embree's packets and streams are told are incoherent. */
+static int set_incoherent(sc_rayset_kind k) { return k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM; }
+
 static sc_cmp_row *row_add(sc_cmp_rows *r)
 {
     if (r->count == r->cap) {
@@ -413,7 +416,7 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
         sc_tracer_counters ctr;
         memset(&ctr, 0, sizeof ctr);
         /* Embree's streams and packets get their coherence flag from the ray set */
-        r->tr[ti].incoherent = k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM;
+        r->tr[ti].incoherent = set_incoherent((sc_rayset_kind)k);
         r->tr[ti].ftz = opt->ftz;
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
         if (st != SC_OK) {
@@ -436,16 +439,21 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
  * rtcOccluded1M ("embree-stream").
  * best_embree: against the fastest Embree row of its default scene flags
  * and the same width in the run: for single rays "embree" and
- * "embree-high", for packets also the rows of one fixed flag
- * ("embree-p16-coherent", "embree-p16-incoherent"), as a user would pick
- * Embree's faster build and flag. */
-static int best_candidate(const char *tracer, int width)
+ * "embree-high", for packets also the row of the other fixed flag
+ * ("embree-p16-incoherent" for camera and shadow rays, "-coherent" for
+ * bounce and random rays), as a user would pick Embree's faster build
+ * and flag. */
+static int best_candidate(const char *tracer, int width, sc_rayset_kind rays)
 {
 #ifdef SC_HAVE_EMBREE
     const sc_tracer_def *d = sc_tracer_find(tracer);
-    return d && d->family == SC_TRACER_EMBREE && d->mode == SC_EMBREE_DEFAULT && d->packet == width;
+    if (!d || d->family != SC_TRACER_EMBREE || d->mode != SC_EMBREE_DEFAULT || d->packet != width)
+        return 0;
+    /* a fixed-flag row with the ray set's own flag repeats embree-pW: the
+     * faster of two runs of one configuration would only pick the noise */
+    return !d->coherence || (d->coherence == SC_TRACER_INCOHERENT) != set_incoherent(rays);
 #else
-    (void)tracer, (void)width;
+    (void)tracer, (void)width, (void)rays;
     return 0;
 #endif
 }
@@ -465,7 +473,7 @@ static void embree_ratios(sc_cmp_rows *out, size_t first_row)
                 continue;
             if (strcmp(o->tracer, ref) == 0)
                 row->speed_vs_embree = row->mrays_per_s / o->mrays_per_s;
-            if (best_candidate(o->tracer, w) && (!best || o->mrays_per_s > best->mrays_per_s))
+            if (best_candidate(o->tracer, w, row->rays) && (!best || o->mrays_per_s > best->mrays_per_s))
                 best = o;
         }
         if (best) {
