@@ -186,7 +186,7 @@ static sc_status make_embree(bench_ctx *c, sc_bench_scene *sc)
         const sc_rayset *rs = &c->sets[k];
         if (!wanted(c->o, (sc_rayset_kind)k))
             continue;
-        c->emb.incoherent = k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM;
+        c->emb.incoherent = sc_tracer_set_incoherent((sc_rayset_kind)k);
         if (k == SC_RAYS_SHADOW) {
             if (!(c->emb_occ = malloc(rs->count + 1)))
                 return SC_ERR_OUT_OF_MEMORY;
@@ -378,7 +378,7 @@ static sc_status run_config(bench_ctx *c, int leaf, int mode, const sc_bench_sin
         const sc_rayset *rs = &c->sets[r.kind];
         r.rays = rs->count;
         /* Embree's packets get their coherence flag from the ray set */
-        c->emb.incoherent = r.kind == SC_RAYS_DIFFUSE || r.kind == SC_RAYS_RANDOM;
+        c->emb.incoherent = sc_tracer_set_incoherent(r.kind);
         check(c, &t, r.kind, rs, &r);
         if (r.diff_brute) {
             size_t step = rs->count > BRUTE_SAMPLE ? rs->count / BRUTE_SAMPLE : 1;

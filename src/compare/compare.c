@@ -44,9 +44,6 @@ void sc_cmp_rows_free(sc_cmp_rows *r)
     memset(r, 0, sizeof *r);
 }
 
-/* The ray sets Embree's packets and streams are told are incoherent. */
-static int set_incoherent(sc_rayset_kind k) { return k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM; }
-
 static sc_cmp_row *row_add(sc_cmp_rows *r)
 {
     if (r->count == r->cap) {
@@ -416,7 +413,7 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
         sc_tracer_counters ctr;
         memset(&ctr, 0, sizeof ctr);
         /* Embree's streams and packets get their coherence flag from the ray set */
-        r->tr[ti].incoherent = set_incoherent((sc_rayset_kind)k);
+        r->tr[ti].incoherent = sc_tracer_set_incoherent((sc_rayset_kind)k);
         r->tr[ti].ftz = opt->ftz;
         st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
         if (st != SC_OK) {
@@ -451,7 +448,7 @@ static int best_candidate(const char *tracer, int width, sc_rayset_kind rays)
         return 0;
     /* a fixed-flag row with the ray set's own flag repeats embree-pW: the
      * faster of two runs of one configuration would only pick the noise */
-    return !d->coherence || (d->coherence == SC_TRACER_INCOHERENT) != set_incoherent(rays);
+    return !d->coherence || (d->coherence == SC_TRACER_INCOHERENT) != sc_tracer_set_incoherent(rays);
 #else
     (void)tracer, (void)width, (void)rays;
     return 0;

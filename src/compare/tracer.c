@@ -42,8 +42,8 @@ static const sc_tracer_def all_tracers[] = {
     { "embree-p16", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0, 0 },
     /* Embree's packets with one flag for every ray set: its faster flag is
      * not always the one its rays suggest (shadow packets on foliage run
-     * faster incoherent), and the best Embree packet is the faster of these
-     * and embree-p8 / embree-p16 (compare.c) */
+     * faster incoherent); the best Embree packet is the faster of
+     * embree-p8 / embree-p16 and the row of the other flag (compare.c) */
     { "embree-p8-coherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0, SC_TRACER_COHERENT },
     { "embree-p8-incoherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 8, 0, SC_TRACER_INCOHERENT },
     { "embree-p16-coherent", SC_TRACER_EMBREE, SC_EMBREE_DEFAULT, SC_EMBREE_QUALITY_MEDIUM, 0, 16, 0, SC_TRACER_COHERENT },

@@ -50,13 +50,17 @@ typedef struct sc_tracer {
     int counted;             /* reports triangle tests */
     int fp_exact;            /* false positives are counted exactly */
     int incoherent;          /* Embree's stream and packet flag for the next runs: the rays are
-                              * incoherent (diffuse, random); set by the caller */
+                              * incoherent (sc_tracer_set_incoherent); set by the caller */
     int ftz;                 /* sc_tracer_run_threads sets MXCSR flush-to-zero and
                               * denormals-are-zero in every thread it runs this tracer
                               * on (and restores it): Embree asks for it; set by the caller */
     int instanced;           /* built by sc_tracer_build_scene through instances */
     void *aux;               /* Embree through instances: the map back to flat triangles */
 } sc_tracer;
+
+/* The ray sets Embree's streams and packets are told are incoherent (bounce
+ * and random rays); camera and shadow rays are coherent. */
+static inline int sc_tracer_set_incoherent(sc_rayset_kind k) { return k == SC_RAYS_DIFFUSE || k == SC_RAYS_RANDOM; }
 
 /* The named tracers of this build, in table order (NULL-terminated). */
 const char *const *sc_tracer_names(int *count);
