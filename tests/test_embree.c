@@ -264,11 +264,30 @@ static void test_version(void **state)
     assert_int_equal(sc_embree_version(NULL, 8), SC_ERR_INVALID_ARGUMENT);
 }
 
+/* The median of the rounds' ratios t_ref / t_row: rounds pair the rows'
+ * times. */
+static double paired(const sc_cmp_row *row, const sc_cmp_row *ref)
+{
+    double q[SC_CMP_MAX_REPEATS];
+    assert_int_equal(row->rounds, ref->rounds);
+    const int n = row->rounds;
+    for (int i = 0; i < n; i++)
+        q[i] = ref->round_s[i] / row->round_s[i];
+    for (int i = 1; i < n; i++)   /* insertion sort: n is small */
+        for (int j = i; j > 0 && q[j] < q[j - 1]; j--) {
+            double t = q[j];
+            q[j] = q[j - 1], q[j - 1] = t;
+        }
+    return n % 2 ? q[n / 2] : 0.5 * (q[n / 2 - 1] + q[n / 2]);
+}
+
 /* compare's best Embree: every row's best_embree is its speed over the
- * fastest Embree row of default flags and the same width in the run (the
- * robust build not), and names it; of the packets' fixed-flag rows only
- * the one whose flag is not the ray set's (camera and shadow rays are
- * coherent), the other repeating embree-p16. */
+ * fastest Embree row (by median) of default flags and the same width in
+ * the run (the robust build not), and names it; of the packets' fixed-flag
+ * rows only the one whose flag is not the ray set's (camera and shadow
+ * rays are coherent), the other repeating embree-p16. Both ratios are the
+ * medians of the rounds' paired ratios, and a row's speed is the median
+ * round's. */
 static void test_best_embree(void **state)
 {
     (void)state;
@@ -288,7 +307,7 @@ static void test_best_embree(void **state)
     opt.ntracers = NT;
     opt.threads[0] = 1, opt.nthreads = 1;
     opt.ray_kinds = 1u << SC_RAYS_PRIMARY | 1u << SC_RAYS_SHADOW;
-    opt.oracle_rays = 0, opt.repeats = 1, opt.min_seconds = 0;
+    opt.oracle_rays = 0, opt.repeats = 4, opt.min_seconds = 0;
     opt.width = 32;
     sc_cmp_rows rows = { 0 };
     char err[256] = "";
@@ -309,8 +328,23 @@ static void test_best_embree(void **state)
         }
         assert_non_null(best);
         assert_string_equal(r->best_embree_tracer, best->tracer);
-        assert_true(fabs(r->best_embree - r->mrays_per_s / best->mrays_per_s) <= 1e-12 * r->best_embree);
-        assert_true(r->mrays_per_s > 0);
+        assert_true(fabs(r->best_embree - paired(r, best)) <= 1e-12 * r->best_embree);
+        assert_int_equal(r->rounds, opt.repeats);
+        /* the speed is a round's: the one of time rank repeats / 2 */
+        int slower = 0, faster = 0, same = 0;
+        for (int k = 0; k < r->rounds; k++) {
+            assert_true(r->round_s[k] > 0);
+            const double mr = (double)r->nrays / r->round_s[k] / 1e6;
+            slower += mr < r->mrays_per_s * (1 - 1e-12);
+            faster += mr > r->mrays_per_s * (1 + 1e-12);
+            same += fabs(mr - r->mrays_per_s) <= 1e-12 * mr;
+        }
+        assert_true(same >= 1);
+        assert_true(faster <= opt.repeats / 2 && slower <= opt.repeats - 1 - opt.repeats / 2);
+        const char *ref = w == 16 ? "embree-p16" : w == 8 ? "embree-p8" : "embree";
+        for (size_t j = 0; j < rows.count; j++)
+            if (rows.rows[j].rays == r->rays && strcmp(rows.rows[j].tracer, ref) == 0)
+                assert_true(fabs(r->speed_vs_embree - paired(r, &rows.rows[j])) <= 1e-12 * r->speed_vs_embree);
     }
     sc_cmp_rows_free(&rows);
     sc_proc_free(&pm);

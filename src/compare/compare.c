@@ -122,6 +122,13 @@ static void score(const sc_rayset *set, const size_t *sample, const sc_oracle *o
     free(terr);
 }
 
+/* One tracer's part of a set's timing: how many runs of the set make one
+ * timed repeat, and each round's seconds for one run. */
+typedef struct timed {
+    int loops;
+    double s[SC_CMP_MAX_REPEATS];
+} timed;
+
 /* One scene's comparison: the tracers, the ray sets, and the buffers every
  * set is traced into. */
 typedef struct cmp_run {
@@ -134,6 +141,7 @@ typedef struct cmp_run {
     int closed;
     sc_tracer tr[SC_CMP_MAX_TRACERS];
     int ntr;
+    timed *timed;            /* one per tracer: the set being timed */
     /* Through instances (NULL: the flat mesh): the view, and what the
      * oracle needs: the own triangles, the objects checked, and a scene
      * accel whose object-space rays are the ones the hits are exact for. */
@@ -155,7 +163,7 @@ static void run_free(cmp_run *r)
         sc_rayset_free(&r->sets[k]);
     for (int i = 0; i < r->ntr; i++)
         sc_tracer_free(&r->tr[i]);
-    free(r->hits), free(r->occ), free(r->sample), free(r->srays);
+    free(r->hits), free(r->occ), free(r->sample), free(r->srays), free(r->timed);
     free(r->objects), free(r->own_idx), free(r->own_prim);
     sc_scene_accel_free(r->oracle_accel);
 }
@@ -292,93 +300,101 @@ static sc_status make_rays(cmp_run *r, const sc_camera *camera, const float ligh
     r->occ = malloc(maxn);
     r->sample = malloc(maxn * sizeof *r->sample);
     r->srays = malloc(maxn * sizeof *r->srays);
-    return r->hits && r->occ && r->sample && r->srays ? SC_OK : SC_ERR_OUT_OF_MEMORY;
+    r->timed = malloc(SC_CMP_MAX_TRACERS * sizeof *r->timed);
+    return r->hits && r->occ && r->sample && r->srays && r->timed ? SC_OK : SC_ERR_OUT_OF_MEMORY;
 }
 
-/* One row per thread count: the median of the timed repeats beside the
- * accuracy and the work counters of the checking run. */
-static sc_status add_rows(cmp_run *r, int k, const sc_tracer *t, const accuracy *acc, const sc_tracer_counters *ctr,
-                          sc_cmp_rows *out)
+/* Times every tracer on one set at one thread count in rounds: a round runs
+ * each tracer once, forwards on even rounds and backwards on odd ones, so a
+ * burst of load from the VM's neighbours falls on every tracer of a round
+ * alike and the ratios of one round are paired in time (timing them one
+ * tracer after another put two runs of one Embree configuration 25 % apart).
+ * A repeat runs the set `loops` times, enough for min_seconds, so a small
+ * set is not timed over a few milliseconds; the first run of each tracer
+ * (untimed for the result) measures how many that is. */
+static sc_status time_rounds(cmp_run *r, int k, int nthreads, timed *tm)
 {
     const sc_cmp_options *opt = r->opt;
     const sc_rayset *set = &r->sets[k];
     uint8_t *occ = k == SC_RAYS_SHADOW ? r->occ : NULL;
-    for (int th = 0; th < opt->nthreads; th++) {
-        double times[64];
-        int reps = opt->repeats < 64 ? opt->repeats : 64;
-        /* A repeat runs the set `loops` times, enough for min_seconds, so a
-         * small set is not timed over a few milliseconds of a noisy VM; the
-         * first run (untimed for the result) measures how many that is. */
+    const int reps = opt->repeats;
+    sc_status st = SC_OK;
+    if (opt->timing)
+        opt->timing(opt->timing_ctx, 1);
+    for (int ti = 0; ti < r->ntr && st == SC_OK; ti++) {
         double first;
-        if (opt->timing)
-            opt->timing(opt->timing_ctx, 1);
-        sc_status st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &first);
-        if (st != SC_OK) {
-            if (opt->timing)
-                opt->timing(opt->timing_ctx, 0);
-            return st;
-        }
+        st = sc_tracer_run_threads(&r->tr[ti], set->rays, set->count, r->hits, occ, nthreads, &first);
         int loops = 1;
         if (opt->min_seconds > 0 && first < opt->min_seconds)
             loops = first > 0 ? (int)ceil(opt->min_seconds / first) : 1000;
-        if (loops > 1000)
-            loops = 1000;
-        for (int i = 0; i < reps; i++) {
+        tm[ti].loops = loops > 1000 ? 1000 : loops;
+    }
+    for (int i = 0; i < reps && st == SC_OK; i++)
+        for (int j = 0; j < r->ntr && st == SC_OK; j++) {
+            const int ti = i % 2 ? r->ntr - 1 - j : j;
             double sum = 0;
-            for (int l = 0; l < loops; l++) {
+            for (int l = 0; l < tm[ti].loops && st == SC_OK; l++) {
                 double s;
-                st = sc_tracer_run_threads(t, set->rays, set->count, r->hits, occ, opt->threads[th], &s);
-                if (st != SC_OK)
-                    break;
+                st = sc_tracer_run_threads(&r->tr[ti], set->rays, set->count, r->hits, occ, nthreads, &s);
                 sum += s;
             }
-            if (st != SC_OK)
-                break;
-            times[i] = sum / loops;
+            tm[ti].s[i] = sum / tm[ti].loops;
         }
-        if (opt->timing)
-            opt->timing(opt->timing_ctx, 0);
-        if (st != SC_OK)
-            return st;
-        qsort(times, (size_t)reps, sizeof times[0], sc_cmp_double);
-        sc_cmp_row *row = row_add(out);
-        if (!row)
-            return SC_ERR_OUT_OF_MEMORY;
-        snprintf(row->scene, sizeof row->scene, "%s", r->scene);
-        row->triangles = r->mesh.view.triangle_count;
-        row->instances = r->iv ? r->iv->num_instances : 0;
-        row->closed = r->closed;
-        row->rays = (sc_rayset_kind)k;
-        row->nrays = set->count;
-        snprintf(row->tracer, sizeof row->tracer, "%s", t->def.name);
-        row->threads = opt->threads[th];
-        row->mrays_per_s = (double)set->count / times[reps / 2] / 1e6;
-        row->speed_vs_embree = NAN;
-        row->best_embree = NAN;
-        row->best_embree_tracer[0] = 0;
-        snprintf(row->embree_build, sizeof row->embree_build, "%s", opt->embree_build ? opt->embree_build : "");
-        row->ftz = opt->ftz;
-        row->loops = loops;
-        row->oracle_rays = acc->oracle_rays;
-        row->hit_miss_disagree = acc->hit_miss;
-        row->primid_disagree = acc->primid;
-        row->holes = acc->holes;
-        row->hole_rays = acc->hole_rays;
-        row->grazes_missed = acc->grazes_missed;
-        row->graze_rays = acc->graze_rays;
-        row->t_err_median = acc->t_med;
-        row->t_err_max = acc->t_max;
-        row->bytes_per_tri = t->bytes_per_tri;
-        row->build_s = t->build_seconds;
-        row->has_prefilter_stats = t->prefilter;
-        double nr = ctr->rays ? (double)ctr->rays : 1;
-        row->sphere_tests_per_ray = t->prefilter ? (double)ctr->sphere_tests / nr : NAN;
-        row->sphere_reject_rate = t->prefilter && ctr->sphere_tests
-                                      ? (double)ctr->sphere_rejects / (double)ctr->sphere_tests : NAN;
-        uint64_t passed = ctr->sphere_tests - ctr->sphere_rejects;
-        row->false_positive_rate = t->fp_exact && passed ? (double)ctr->false_positives / (double)passed : NAN;
-        row->tri_tests_per_ray = t->counted ? (double)ctr->tri_tests / nr : NAN;
-    }
+    if (opt->timing)
+        opt->timing(opt->timing_ctx, 0);
+    return st;
+}
+
+/* One row: the median of the tracer's timed rounds beside the accuracy
+ * and the work counters of the checking run. */
+static sc_status add_row(cmp_run *r, int k, const sc_tracer *t, const accuracy *acc, const sc_tracer_counters *ctr,
+                         int nthreads, const timed *tm, sc_cmp_rows *out)
+{
+    const sc_cmp_options *opt = r->opt;
+    const sc_rayset *set = &r->sets[k];
+    const int reps = opt->repeats;
+    double sorted[SC_CMP_MAX_REPEATS];
+    memcpy(sorted, tm->s, (size_t)reps * sizeof sorted[0]);
+    qsort(sorted, (size_t)reps, sizeof sorted[0], sc_cmp_double);
+    sc_cmp_row *row = row_add(out);
+    if (!row)
+        return SC_ERR_OUT_OF_MEMORY;
+    snprintf(row->scene, sizeof row->scene, "%s", r->scene);
+    row->triangles = r->mesh.view.triangle_count;
+    row->instances = r->iv ? r->iv->num_instances : 0;
+    row->closed = r->closed;
+    row->rays = (sc_rayset_kind)k;
+    row->nrays = set->count;
+    snprintf(row->tracer, sizeof row->tracer, "%s", t->def.name);
+    row->threads = nthreads;
+    row->mrays_per_s = (double)set->count / sorted[reps / 2] / 1e6;
+    row->speed_vs_embree = NAN;
+    row->best_embree = NAN;
+    row->best_embree_tracer[0] = 0;
+    snprintf(row->embree_build, sizeof row->embree_build, "%s", opt->embree_build ? opt->embree_build : "");
+    row->ftz = opt->ftz;
+    row->loops = tm->loops;
+    row->rounds = reps;
+    memcpy(row->round_s, tm->s, (size_t)reps * sizeof row->round_s[0]);
+    row->oracle_rays = acc->oracle_rays;
+    row->hit_miss_disagree = acc->hit_miss;
+    row->primid_disagree = acc->primid;
+    row->holes = acc->holes;
+    row->hole_rays = acc->hole_rays;
+    row->grazes_missed = acc->grazes_missed;
+    row->graze_rays = acc->graze_rays;
+    row->t_err_median = acc->t_med;
+    row->t_err_max = acc->t_max;
+    row->bytes_per_tri = t->bytes_per_tri;
+    row->build_s = t->build_seconds;
+    row->has_prefilter_stats = t->prefilter;
+    double nr = ctr->rays ? (double)ctr->rays : 1;
+    row->sphere_tests_per_ray = t->prefilter ? (double)ctr->sphere_tests / nr : NAN;
+    row->sphere_reject_rate = t->prefilter && ctr->sphere_tests
+                                  ? (double)ctr->sphere_rejects / (double)ctr->sphere_tests : NAN;
+    uint64_t passed = ctr->sphere_tests - ctr->sphere_rejects;
+    row->false_positive_rate = t->fp_exact && passed ? (double)ctr->false_positives / (double)passed : NAN;
+    row->tri_tests_per_ray = t->counted ? (double)ctr->tri_tests / nr : NAN;
     return SC_OK;
 }
 
@@ -408,22 +424,31 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
                 sc_rayset_kind_name((sc_rayset_kind)k), set->count, ns, ohits, sc_now_seconds() - t0,
                 ns ? (double)orc.exact_calls / (double)ns : 0);
     int shadow = k == SC_RAYS_SHADOW;
+    accuracy acc[SC_CMP_MAX_TRACERS];
+    sc_tracer_counters ctr[SC_CMP_MAX_TRACERS];
     for (int ti = 0; ti < r->ntr && st == SC_OK; ti++) {
         const sc_tracer *t = &r->tr[ti];
-        sc_tracer_counters ctr;
-        memset(&ctr, 0, sizeof ctr);
+        memset(&ctr[ti], 0, sizeof ctr[ti]);
         /* Embree's streams and packets get their coherence flag from the ray set */
         r->tr[ti].incoherent = sc_tracer_set_incoherent((sc_rayset_kind)k);
         r->tr[ti].ftz = opt->ftz;
-        st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr);
+        st = sc_tracer_run(t, set->rays, set->count, r->hits, shadow ? r->occ : NULL, &ctr[ti]);
         if (st != SC_OK) {
             if (r->err)
                 snprintf(r->err, r->errlen, "%s: %s failed: %s", r->scene, t->def.name, sc_strerror(st));
             break;
         }
-        accuracy acc;
-        score(set, r->sample, &orc, r->hits, shadow ? r->occ : NULL, k == SC_RAYS_ADVERSARIAL, &acc);
-        st = add_rows(r, k, t, &acc, &ctr, out);
+        score(set, r->sample, &orc, r->hits, shadow ? r->occ : NULL, k == SC_RAYS_ADVERSARIAL, &acc[ti]);
+    }
+    timed *tm = r->timed;
+    for (int th = 0; th < opt->nthreads && st == SC_OK; th++) {
+        if ((st = time_rounds(r, k, opt->threads[th], tm)) != SC_OK) {
+            if (r->err)
+                snprintf(r->err, r->errlen, "%s: timing failed: %s", r->scene, sc_strerror(st));
+            break;
+        }
+        for (int ti = 0; ti < r->ntr && st == SC_OK; ti++)
+            st = add_row(r, k, &r->tr[ti], &acc[ti], &ctr[ti], opt->threads[th], &tm[ti], out);
     }
     sc_oracle_free(&orc);
     return st;
@@ -434,7 +459,8 @@ static sc_status run_set(cmp_run *r, int k, sc_cmp_rows *out)
  * ("embree"), packets of 8 and 16 against "embree-p8" and "embree-p16"
  * (the flag of the ray set), streams against rtcIntersect1M /
  * rtcOccluded1M ("embree-stream").
- * best_embree: against the fastest Embree row of its default scene flags
+ * Both are medians of the rounds' paired ratios (time_rounds).
+ * best_embree: against the fastest Embree row (by median) of its default scene flags
  * and the same width in the run: for single rays "embree" and
  * "embree-high", for packets also the row of the other fixed flag
  * ("embree-p16-incoherent" for camera and shadow rays, "-coherent" for
@@ -455,6 +481,17 @@ static int best_candidate(const char *tracer, int width, sc_rayset_kind rays)
 #endif
 }
 
+/* row's speed over ref's: the median over their shared rounds of ref's
+ * time over row's, each ratio paired in time. */
+static double paired_ratio(const sc_cmp_row *row, const sc_cmp_row *ref)
+{
+    double q[SC_CMP_MAX_REPEATS];
+    const int n = row->rounds < ref->rounds ? row->rounds : ref->rounds;
+    for (int i = 0; i < n; i++)
+        q[i] = ref->round_s[i] / row->round_s[i];
+    return n ? sc_median(q, n) : NAN;
+}
+
 static void embree_ratios(sc_cmp_rows *out, size_t first_row)
 {
     for (size_t i = first_row; i < out->count; i++) {
@@ -469,12 +506,12 @@ static void embree_ratios(sc_cmp_rows *out, size_t first_row)
             if (o->rays != row->rays || o->threads != row->threads)
                 continue;
             if (strcmp(o->tracer, ref) == 0)
-                row->speed_vs_embree = row->mrays_per_s / o->mrays_per_s;
+                row->speed_vs_embree = paired_ratio(row, o);
             if (best_candidate(o->tracer, w, row->rays) && (!best || o->mrays_per_s > best->mrays_per_s))
                 best = o;
         }
         if (best) {
-            row->best_embree = row->mrays_per_s / best->mrays_per_s;
+            row->best_embree = paired_ratio(row, best);
             snprintf(row->best_embree_tracer, sizeof row->best_embree_tracer, "%s", best->tracer);
         }
     }
@@ -487,7 +524,7 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
     if (err && errlen)
         err[0] = 0;
     if (!scene_name || !camera || (nlights && !lights) || !opt || !out || opt->nthreads < 1 ||
-        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1 || !(opt->min_seconds >= 0) ||
+        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1 || opt->repeats > SC_CMP_MAX_REPEATS || !(opt->min_seconds >= 0) ||
         opt->min_seconds > 60)
         return SC_ERR_INVALID_ARGUMENT;
     for (int k = 0; k < opt->nthreads; k++)

@@ -13,7 +13,7 @@
 #include "spherecull/sc_rays.h"
 #include "spherecull/sc_scene.h"
 
-enum { SC_CMP_MAX_THREADS = 8, SC_CMP_MAX_TRACERS = 32 };
+enum { SC_CMP_MAX_THREADS = 8, SC_CMP_MAX_TRACERS = 32, SC_CMP_MAX_REPEATS = 64 };
 
 typedef struct sc_cmp_options {
     unsigned ray_kinds;                 /* bit per sc_rayset_kind */
@@ -22,7 +22,8 @@ typedef struct sc_cmp_options {
     int threads[SC_CMP_MAX_THREADS];
     int nthreads;
     size_t oracle_rays;                 /* oracle sample per set (0: no oracle) */
-    int repeats;                        /* timed runs per row; the median is reported */
+    int repeats;                        /* timed rounds (1..SC_CMP_MAX_REPEATS): each times every
+                                           tracer once; medians are reported */
     int width, height;                  /* primary rays (the scene camera's aspect is kept) */
     size_t random_rays, adversarial_rays;
     uint64_t seed;
@@ -50,13 +51,18 @@ typedef struct sc_cmp_row {
     char tracer[40];
     int threads;
     double mrays_per_s;
-    double speed_vs_embree;             /* mrays / embree's at the same threads; NaN if none */
-    double best_embree;                 /* mrays / the faster Embree of its kind (single rays:
-                                           embree or embree-high); NaN if none */
+    double speed_vs_embree;             /* the median over the rounds of embree's time / this
+                                           row's, at the same threads; NaN if none */
+    double best_embree;                 /* the same against the faster (by median) Embree of its
+                                           kind (single rays: embree or embree-high); NaN if none */
     char best_embree_tracer[40];        /* which one that was ("" if none) */
     char embree_build[128];             /* the Embree the run used ("" without Embree) */
     int ftz;                            /* the MXCSR mode it was timed in */
     int loops;                          /* runs of the set per timed repeat (min_seconds) */
+    int rounds;                         /* timed rounds, and each one's seconds for one run of
+                                           the set: the rows of one set and thread count were
+                                           timed in the same rounds, so round i pairs them */
+    double round_s[SC_CMP_MAX_REPEATS];
     size_t oracle_rays;
     size_t hit_miss_disagree, primid_disagree;
     size_t holes, hole_rays;            /* vertex/edge rays that cross the surface: missed / all */
