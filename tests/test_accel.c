@@ -1390,6 +1390,29 @@ static void test_packets(void **state)
                                  sc_isa_name((sc_isa)isa), r, g->t, g->prim, want[r].t, want[r].prim);
                     assert_int_equal(*(const int32_t *)(const void *)((const char *)got_occ + r * os), want_occ[r]);
                 }
+                /* a refused ray in the stream: an error, its answer untouched
+                 * (also in a scene of meshes, whose hits' ids are mapped
+                 * after the BVH's stream), the others answered as before */
+                const sc_ray keep = rays[N / 2 + 3];
+                rays[N / 2 + 3].dir[2] = NAN;
+                memset(got, 0x5a, 2 * N * sizeof *got);
+                memset(got_occ, 0x5a, 3 * N * sizeof *got_occ);
+                assert_int_equal(sc_accel_closest_n(a, rays, sizeof *rays, got, hs, N, 0, NULL),
+                                 SC_ERR_INVALID_ARGUMENT);
+                assert_int_equal(sc_accel_any_n(a, rays, sizeof *rays, got_occ, os, N, 0, NULL),
+                                 SC_ERR_INVALID_ARGUMENT);
+                rays[N / 2 + 3] = keep;
+                for (size_t r = 0; r < N; r++) {
+                    const sc_hitrec *g = (const sc_hitrec *)(const void *)((const char *)got + r * hs);
+                    const int32_t o = *(const int32_t *)(const void *)((const char *)got_occ + r * os);
+                    if (r == N / 2 + 3) {
+                        assert_int_equal(g->prim, 0x5a5a5a5au);
+                        assert_int_equal((uint32_t)o, 0x5a5a5a5au);
+                    } else {
+                        assert_memory_equal(g, &want[r], sizeof *g);
+                        assert_int_equal(o, want_occ[r]);
+                    }
+                }
                 /* single rays after 16 world rays of one octant (the object
                  * rays take the octant kernels) and after 16 of changing
                  * octants (the one-body kernels): the same answers */

@@ -535,20 +535,28 @@ static void test_streams(void **state)
         assert_int_equal(bad, 0);
     }
     assert_int_equal(st.rays, 2 * n);      /* every ray counted once, closest and any */
-    /* a refused ray: an error, no answer for it, the rest answered (also
-     * by the interleaved kernel) */
-    bvh->interleave = 1;
+    /* a refused ray: an error, no answer for it, the rest answered, by
+     * the rays traced alone a run at a time and by the interleaved kernel */
     r[20].r.dir[1] = NAN;
-    memset(h, 0x5a, n * sizeof *h);
-    assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n, 0, NULL),
-                     SC_ERR_INVALID_ARGUMENT);
-    assert_int_equal(h[20].h.prim, 0x5a5a5a5au);
-    for (size_t i = 0; i < n; i++) {
-        sc_hitrec ref;
-        if (i == 20)
-            continue;
-        assert_int_equal(sc_trace_closest(bvh, &r[i].r, &ref, NULL), SC_OK);
-        assert_memory_equal(&h[i].h, &ref, sizeof ref);
+    for (int il = 0; il < 2; il++) {
+        bvh->interleave = il;
+        memset(h, 0x5a, n * sizeof *h);
+        assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n, 0, NULL),
+                         SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal(h[20].h.prim, 0x5a5a5a5au);
+        assert_int_equal(sc_trace_any_n(bvh, &r[0].r, sizeof *r, &h[0].occ, sizeof *h, n, 0, NULL),
+                         SC_ERR_INVALID_ARGUMENT);
+        assert_int_equal((uint32_t)h[20].occ, 0x5a5a5a5au);
+        for (size_t i = 0; i < n; i++) {
+            sc_hitrec ref;
+            int occ;
+            if (i == 20)
+                continue;
+            assert_int_equal(sc_trace_closest(bvh, &r[i].r, &ref, NULL), SC_OK);
+            assert_memory_equal(&h[i].h, &ref, sizeof ref);
+            assert_int_equal(sc_trace_any(bvh, &r[i].r, &occ, NULL), SC_OK);
+            assert_int_equal(h[i].occ, occ);
+        }
     }
     assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, 8, &h[0].h, sizeof *h, n, 0, NULL), SC_ERR_INVALID_ARGUMENT);
     assert_int_equal(sc_trace_closest_n(bvh, &r[0].r, sizeof *r, &h[0].h, sizeof *h, n, 4, NULL),

@@ -516,7 +516,7 @@ sc_status sc_accel_instance_ray(const sc_accel *a, uint32_t id, const sc_ray *ra
 
 sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit, sc_trace_stats *st)
 {
-    if (!a || !ray || !hit || !a->committed || !sc_ray_valid(ray))
+    if (!a || !ray || !hit || !a->committed || !sc_ray_valid_sse(ray))
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst) {
         if (!a->bvh) {
@@ -539,7 +539,7 @@ sc_status sc_accel_closest(const sc_accel *a, const sc_ray *ray, sc_hitrec *hit,
 
 sc_status sc_accel_any(const sc_accel *a, const sc_ray *ray, int *occluded, sc_trace_stats *st)
 {
-    if (!a || !ray || !occluded || !a->committed || !sc_ray_valid(ray))
+    if (!a || !ray || !occluded || !a->committed || !sc_ray_valid_sse(ray))
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst) {
         if (!a->bvh) {
@@ -652,6 +652,30 @@ static sc_status accel_single(const void *obj, const sc_ray *ray, void *out, int
     return s;
 }
 
+/* accel_single's choices for a run of rays (the top level: a stream of an
+ * instanced scene), with the kernels looked up once. */
+static sc_status accel_alone(const void *obj, const char *rays, size_t ray_stride, char *out, size_t out_stride,
+                             unsigned cnt, int any)
+{
+    const sc_accel *a = obj;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[0];
+    sc_status status = SC_OK;
+    for (unsigned i = 0; i < cnt; i++) {
+        const sc_ray *r = (const sc_ray *)(const void *)(rays + i * ray_stride);
+        void *o = out + i * out_stride;
+        if (!sc_ray_valid_sse(r)) {
+            status = SC_ERR_INVALID_ARGUMENT;
+        } else if (any) {
+            *(int32_t *)o = a->top_nodes ? k->top_any(&a->top, r, NULL) : 0;
+        } else {
+            sc_top_miss(r->tmax, o);
+            if (a->top_nodes)
+                k->top_closest(&a->top, r, o, NULL);
+        }
+    }
+    return status;
+}
+
 /* The streams' arguments: out is the result array, out_min its element size. */
 static int stream_ok(const sc_accel *a, const sc_ray *rays, size_t ray_stride, const void *out, size_t out_stride,
                      size_t out_min, size_t n, unsigned flags)
@@ -665,7 +689,7 @@ static int stream_ok(const sc_accel *a, const sc_ray *rays, size_t ray_stride, c
 static sc_status accel_stream(const sc_accel *a, const sc_ray *rays, size_t ray_stride, void *out, size_t out_stride,
                               size_t n, sc_trace_stats *st, int any)
 {
-    const sc_stream_target T = { a, a->top.lo, a->top.hi, accel_packet16, accel_single, NULL, NULL };
+    const sc_stream_target T = { a, a->top.lo, a->top.hi, accel_packet16, accel_single, accel_alone, NULL, NULL };
     return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, st, any);
 }
 
@@ -676,9 +700,11 @@ sc_status sc_accel_closest_n(const sc_accel *a, const sc_ray *rays, size_t ray_s
         return SC_ERR_INVALID_ARGUMENT;
     if (!a->ninst && a->bvh) {
         sc_status s = sc_trace_closest_n(a->bvh, rays, ray_stride, hits, hit_stride, n, flags, st);
+        /* not the records of refused rays, which the stream left as they were */
         if (a->bvh->mesh_count > 1)
             for (size_t i = 0; i < n; i++)
-                sc_top_map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
+                if (s == SC_OK || sc_ray_valid_sse((const sc_ray *)(const void *)((const char *)rays + i * ray_stride)))
+                    sc_top_map_ids(a->bvh, (sc_hitrec *)(void *)((char *)hits + i * hit_stride));
         return s;
     }
     return accel_stream(a, rays, ray_stride, hits, hit_stride, n, st, 0);

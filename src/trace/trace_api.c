@@ -299,6 +299,8 @@ static sc_status stream_alone(const sc_stream_target *T, const char *rays, size_
                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any,
                               stream_queue *q)
 {
+    if (!q && !stats && T->alone)
+        return T->alone(T->obj, rays + base * ray_stride, ray_stride, OUT(0), out_stride, cnt, any);
     sc_status status = SC_OK;
     for (unsigned i = 0; i < cnt; i++) {
         if (q && sc_ray_valid(RAY(i))) {
@@ -424,6 +426,26 @@ static sc_status bvh_single(const void *obj, const sc_ray *ray, void *out, int a
     return st;
 }
 
+/* bvh_single's choices for a run of rays, with the kernels looked up once. */
+static sc_status bvh_alone(const void *obj, const char *rays, size_t ray_stride, char *out, size_t out_stride,
+                           unsigned cnt, int any)
+{
+    const sc_bvh *bvh = obj;
+    const sc_trace_kernels *k = &sc_kernels_active()->trace[bvh->cfg.tri_test];
+    sc_status status = SC_OK;
+    for (unsigned i = 0; i < cnt; i++) {
+        const sc_ray *r = (const sc_ray *)(const void *)(rays + i * ray_stride);
+        void *o = out + i * out_stride;
+        if (!sc_ray_valid_sse(r))
+            status = SC_ERR_INVALID_ARGUMENT;
+        else if (any)
+            *(int32_t *)o = k->any_incoherent(bvh, r);
+        else
+            k->closest_adaptive(bvh, r, o);
+    }
+    return status;
+}
+
 static void bvh_batch(const void *obj, const sc_ray *const *rays, void *const *outs, unsigned n, int any)
 {
     const sc_bvh *bvh = obj;
@@ -447,7 +469,7 @@ static sc_status stream(const sc_bvh *bvh, const sc_ray *rays, size_t ray_stride
     if (!bvh || (n && (!rays || !out)) || ray_stride < sizeof(sc_ray) ||
         out_stride < (any ? sizeof(int32_t) : sizeof(sc_hitrec)) || flags != 0)
         return SC_ERR_INVALID_ARGUMENT;
-    const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single,
+    const sc_stream_target T = { bvh, bvh->root_lo, bvh->root_hi, bvh_packet16, bvh_single, bvh_alone,
                                  bvh->interleave ? bvh_batch : NULL,
                                  sc_kernels_active()->trace[bvh->cfg.tri_test].any_stream64 ? bvh_group64 : NULL };
     return sc_stream_run(&T, rays, ray_stride, out, out_stride, n, stats, any);
