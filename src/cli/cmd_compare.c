@@ -27,7 +27,9 @@ static const sc_cli_opt opts[] = {
     [O_TRACERS] = { "tracers", 0, "LIST", "comma list of tracer names (below)", "all of this build" },
     [O_THREADS] = { "threads", 0, "LIST", "thread counts to time, e.g. 1,2", "1,2" },
     [O_ORACLE] = { "oracle-rays", 0, "N", "rays per set checked by the oracle (0 = none)", "10000" },
-    [O_REPEATS] = { "repeats", 0, "N", "timed rounds, each timing every tracer once (backwards on odd rounds); medians are reported", "5" },
+    [O_REPEATS] = { "repeats", 0, "N",
+                    "timed rounds, each timing every tracer once (backwards on odd rounds); medians are reported",
+                    "5" },
     [O_MIN_TIME] = { "min-time", 0, "SECONDS", "each timed run repeats its ray set until this long", "0.2" },
     [O_MXCSR] = { "mxcsr", 0, "MODE", "ftz (flush-to-zero + denormals-are-zero, as Embree asks) or default, "
                                       "in every timed thread of every tracer", "ftz" },
@@ -343,7 +345,8 @@ static int run(int argc, char **argv)
                "embree-p16 (the ray set's coherence flag), stream rows / embree-stream; xBest = speed / the fastest Embree\n"
                "row of the same width in the run (single rays: embree, embree-high; packets: also embree-p8/p16-coherent or\n"
                "-incoherent, the flag the ray set does not get), named in the CSV's best_embree_tracer; both are medians of\n"
-               "ratios paired in time (a round times every tracer once; Mrays/s is the median round);\nsph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
+               "ratios paired in time (a round times every tracer once; Mrays/s is the median round);\n"
+               "sph/ray, rej%%, fp%% (sphere passed, triangle missed, of the passes) and tri/ray are "
                "counted by the prefilter tracers\n(packet rows count ray-triangle and ray-sphere pairs, as single rays do).\n");
     }
     if (rc == 0 && a.csv && sc_cli_write(CMD, a.csv, write_csv_cb, &rows) != 0)

@@ -524,8 +524,8 @@ sc_status sc_cmp_scene(const char *scene_name, const sc_mesh_view *mesh, const s
     if (err && errlen)
         err[0] = 0;
     if (!scene_name || !camera || (nlights && !lights) || !opt || !out || opt->nthreads < 1 ||
-        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1 || opt->repeats > SC_CMP_MAX_REPEATS || !(opt->min_seconds >= 0) ||
-        opt->min_seconds > 60)
+        opt->nthreads > SC_CMP_MAX_THREADS || opt->repeats < 1 || opt->repeats > SC_CMP_MAX_REPEATS ||
+        !(opt->min_seconds >= 0) || opt->min_seconds > 60)
         return SC_ERR_INVALID_ARGUMENT;
     for (int k = 0; k < opt->nthreads; k++)
         if (opt->threads[k] < 1 || opt->threads[k] > SC_CMP_MAX_THREADS)

@@ -294,7 +294,8 @@ static int stream_gather(const sc_stream_target *T, const char *rays, size_t ray
 /* Rays [base, base + cnt) one by one: rays the coherence tests sent alone,
  * or a run with a refused ray (whose others are answered here); into the
  * queue q when the target has a batch kernel and no statistics are asked
- * for. */
+ * for, else the whole run through the target's alone hook when it has one
+ * and no statistics are asked for, else ray by ray through single. */
 static sc_status stream_alone(const sc_stream_target *T, const char *rays, size_t ray_stride, char *out,
                               size_t out_stride, size_t base, unsigned cnt, sc_trace_stats *stats, int any,
                               stream_queue *q)
