@@ -61,14 +61,15 @@ typedef struct sc_exact_hit {
  * of the exact t, with zi = Sz z_i (the vertices' t along the ray),
  * Z = max |zi| and R = (max zi - min zi) / 2 (the spread: barycentric
  * errors sum to zero, so they only move t within the triangle's depth).
- * In te, K and c0 may come from the triangle's own S instead of the root
- * box's (sc_exact_local_bound). The derivation is in tri_exact.c. */
+ * In te, K and c0 come from the triangle's own S where that is below the
+ * root box's (sc_exact_local_bound). The derivation is in tri_exact.c. */
 #define SC_EXACT_K202 (2.02f)
-/* The kernels use one bound per lane for all three edges,
- * E1 = K (hA + hB + hC) + c0 >= each edge's E: the edge sum of the t bound is
- * then at most 3 E1, and SC_EXACT_K606 = 3 SC_EXACT_K202. Looser by at most 2x, which
- * only sends a few more lanes to sc_exact_resolve; six operations fewer per leaf. */
-#define SC_EXACT_K606 (6.06f)
+/* The kernels certify the edges with one bound per lane for all three,
+ * E1 = K (hA + hB + hC) + c0 >= each edge's E: looser by at most 2x, which
+ * only sends a few more lanes to sc_exact_resolve; six operations fewer per
+ * leaf. The t bound takes the edge sum itself, E1+E2+E3 = 2 K (hA + hB + hC)
+ * + 3 c0 (sc_exact_local_bound), not 3 E1: a third less where the t bound
+ * decides whether sc_exact_finish recomputes a hit (a grazing one). */
 #define SC_EXACT_FLOOR_N (0x1p-123f)   /* normal: holds under MXCSR FTZ|DAZ (tri_exact.c) */
 #define SC_EXACT_K15U (15.0f * 0x1p-24f)
 #define SC_EXACT_K3U (3.0f * 0x1p-24f)
@@ -125,14 +126,16 @@ int sc_exact_hit_test(const sc_ray *r, const float v[9]);
 /* sign of t(a) - t(b) for two triangles whose planes the ray crosses */
 int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
 
-/* A t bound above this times |t| is recomputed with sc_exact_local_bound:
- * half of what sc_exact_finish lets through (its [t - 2 te, t + 2 te]
- * within SC_EXACT_REPORT_WIDTH |t|, so te up to a quarter of that). */
+/* A t bound this narrow (times |t|) is half of what sc_exact_finish lets
+ * through (its [t - 2 te, t + 2 te] within SC_EXACT_REPORT_WIDTH |t|, so
+ * te up to a quarter of that): test_exact_tri requires the local bound
+ * below to reach it where the root box's could not. */
 #define SC_EXACT_WIDE (SC_EXACT_REPORT_WIDTH / 8)
 
-/* The edge bound of one triangle for its t bound: E1's K and c0 from the
- * triangle's own S (sc_exact_consts' formulas) where that is below the
- * ray's. The derivation (tri_exact.c) needs S >= |a|_1, a = fl(P - O), for
+/* The sum of one triangle's three edge bounds for its t bound,
+ * 2 K (hA + hB + hC) + 3 c0 (2K exact, 3 c0 and the FMA one rounding each,
+ * inside the 1 % of SC_EXACT_K202), with K and c0 from the triangle's own
+ * S (sc_exact_consts' formulas) where that is below the ray's. The derivation (tri_exact.c) needs S >= |a|_1, a = fl(P - O), for
  * the vertices of the edges it bounds, not for the whole root box: here
  * |a|_1 <= h + (1 + |Sx| + |Sy|) |a_kz| (the shear undone; h = |Px| + |Py|),
  * evaluated here in float: sums of positive terms with at most four
@@ -143,15 +146,18 @@ int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
  * overstates the error by the model's size over the hit's distance, and a
  * t bound that loose sends the hit to sc_exact_finish's double recompute
  * (a third of the random rays' hits on the bunny). Only the t bound uses
- * it, and only where the ray's is wide (SC_EXACT_WIDE): the edges are
- * certified with E1, whose one bound per ray costs nothing per lane. */
+ * it, on every lane whose edges are certain: those are a few a ray, and a
+ * branch on whether the ray's own bound is wide mispredicted on rays that
+ * start inside the model (it was for 40-99 % of such lanes; random rays
+ * 4-9 % faster without it, docs/compare.md, fortieth session). The edges
+ * are certified with E1, whose one bound per ray costs nothing per lane. */
 SC_TRACE_INLINE float sc_exact_local_bound(float xK, float xc0, float Sx, float Sy, float hA, float hB, float hC,
                                            float Akz, float Bkz, float Ckz)
 {
     const float sxy = (1.0f + fabsf(Sx)) + fabsf(Sy);
     const float S = sc_fmax(sc_fmax(fmaf(sxy, fabsf(Akz), hA), fmaf(sxy, fabsf(Bkz), hB)), fmaf(sxy, fabsf(Ckz), hC));
     const float K = sc_fmin(sc_exact_k(S), xK), c0 = sc_fmin(sc_exact_c0(S), xc0);
-    return fmaf(K, (hA + hB) + hC, c0);
+    return fmaf(K + K, (hA + hB) + hC, c0 * 3.0f);
 }
 
 /* The float filter of the exact test (SC_TRI_EXACT): the watertight
@@ -168,7 +174,7 @@ SC_TRACE_INLINE int sc_tri_exact_filter(const sc_ray_pre *p, const float *rows, 
     const float Ax = sh.Ax, Ay = sh.Ay, Bx = sh.Bx, By = sh.By, Cx = sh.Cx, Cy = sh.Cy;
     const float U = sh.U, V = sh.V, Wf = sh.W;
     float hA = fabsf(Ax) + fabsf(Ay), hB = fabsf(Bx) + fabsf(By), hC = fabsf(Cx) + fabsf(Cy);
-    /* one bound for the three edges (see SC_EXACT_K606) */
+    /* one bound for the three edges (see SC_EXACT_K202) */
     float E1 = fmaf(p->xK, (hA + hB) + hC, p->xc0), nE1 = -E1;
     int pU = U > E1, pV = V > E1, pW = Wf > E1;
     int nU = U < nE1, nV = V < nE1, nW = Wf < nE1;
@@ -185,11 +191,8 @@ SC_TRACE_INLINE int sc_tri_exact_filter(const sc_ray_pre *p, const float *rows, 
     float zmax = sc_fmax(sc_fmax(Az, Bz), Cz), zmin = sc_fmin(sc_fmin(Az, Bz), Cz);
     float Z = sc_fmax(zmax, -zmin), R = (zmax - zmin) * 0.5f;
     const float zt = fmaf(Z, SC_EXACT_K15U, fmaf(fabsf(tt), SC_EXACT_K3U, SC_EXACT_FLOOR_T));
-    float e = fmaf(fmaf(R, E1 * SC_EXACT_K606, SC_EXACT_FLOOR_N), fabsf(inv), zt);
-    if (e > SC_EXACT_WIDE * fabsf(tt)) {
-        const float El = sc_exact_local_bound(p->xK, p->xc0, p->Sx, p->Sy, hA, hB, hC, sh.Akz, sh.Bkz, sh.Ckz);
-        e = fmaf(fmaf(R, El * SC_EXACT_K606, SC_EXACT_FLOOR_N), fabsf(inv), zt);
-    }
+    const float El = sc_exact_local_bound(p->xK, p->xc0, p->Sx, p->Sy, hA, hB, hC, sh.Akz, sh.Bkz, sh.Ckz);
+    const float e = fmaf(fmaf(R, El * SC_EXACT_K202, SC_EXACT_FLOOR_N), fabsf(inv), zt);
     if (!(e < INFINITY) || !(fabsf(inv) >= 0x1p-126f))   /* 1/det subnormal or flushed: undecided */
         return 1;
     if (tt - e > tmax || tt + e < tmin)

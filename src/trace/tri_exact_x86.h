@@ -62,23 +62,18 @@ tri_exact8(const trace_ctx *c, const float *rows, unsigned W, unsigned h, unsign
         const __m256 zt = _mm256_fmadd_ps(Z, _mm256_set1_ps(SC_EXACT_K15U),
                                           _mm256_fmadd_ps(ABS(tt), _mm256_set1_ps(SC_EXACT_K3U),
                                                           _mm256_set1_ps(SC_EXACT_FLOOR_T)));
-        const __m256 k606 = _mm256_set1_ps(SC_EXACT_K606), floor_n = _mm256_set1_ps(SC_EXACT_FLOOR_N);
-        __m256 e = _mm256_fmadd_ps(_mm256_fmadd_ps(R, _mm256_mul_ps(E1, k606), floor_n), ABS(inv), zt);
-        const __m256 wide = _mm256_cmp_ps(e, _mm256_mul_ps(_mm256_set1_ps(SC_EXACT_WIDE), ABS(tt)), _CMP_GT_OQ);
-        if (mask8(wide) & in) {
-            /* sc_exact_local_bound */
-            const __m256 sxy = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(1.0f), ABS(c->Sx)), ABS(c->Sy));
-            const __m256 S = _mm256_max_ps(
-                _mm256_max_ps(_mm256_fmadd_ps(sxy, ABS(Akz), hA), _mm256_fmadd_ps(sxy, ABS(Bkz), hB)),
-                _mm256_fmadd_ps(sxy, ABS(Ckz), hC));
-            const __m256 K =
-                _mm256_min_ps(_mm256_fmadd_ps(S, _mm256_set1_ps(SC_EXACT_KS), _mm256_set1_ps(0x1p-123f)), c->xK);
-            const __m256 c0 = _mm256_min_ps(
-                _mm256_fmadd_ps(_mm256_mul_ps(S, S), _mm256_set1_ps(SC_EXACT_CS), _mm256_set1_ps(0x1p-121f)), c->xc0);
-            const __m256 El = _mm256_fmadd_ps(K, hsum, c0);
-            const __m256 el = _mm256_fmadd_ps(_mm256_fmadd_ps(R, _mm256_mul_ps(El, k606), floor_n), ABS(inv), zt);
-            e = _mm256_blendv_ps(e, el, wide);
-        }
+        const __m256 k202 = _mm256_set1_ps(SC_EXACT_K202), floor_n = _mm256_set1_ps(SC_EXACT_FLOOR_N);
+        /* sc_exact_local_bound */
+        const __m256 sxy = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(1.0f), ABS(c->Sx)), ABS(c->Sy));
+        const __m256 S = _mm256_max_ps(
+            _mm256_max_ps(_mm256_fmadd_ps(sxy, ABS(Akz), hA), _mm256_fmadd_ps(sxy, ABS(Bkz), hB)),
+            _mm256_fmadd_ps(sxy, ABS(Ckz), hC));
+        const __m256 K =
+            _mm256_min_ps(_mm256_fmadd_ps(S, _mm256_set1_ps(SC_EXACT_KS), _mm256_set1_ps(0x1p-123f)), c->xK);
+        const __m256 c0 = _mm256_min_ps(
+            _mm256_fmadd_ps(_mm256_mul_ps(S, S), _mm256_set1_ps(SC_EXACT_CS), _mm256_set1_ps(0x1p-121f)), c->xc0);
+        const __m256 El = _mm256_fmadd_ps(_mm256_add_ps(K, K), hsum, _mm256_mul_ps(c0, _mm256_set1_ps(3.0f)));
+        const __m256 e = _mm256_fmadd_ps(_mm256_fmadd_ps(R, _mm256_mul_ps(El, k202), floor_n), ABS(inv), zt);
         unsigned fin = mask8(_mm256_and_ps(_mm256_cmp_ps(e, _mm256_set1_ps(INFINITY), _CMP_LT_OQ),
                                            _mm256_cmp_ps(ABS(inv), _mm256_set1_ps(0x1p-126f), _CMP_GE_OQ)));
         unsigned out = mask8(_mm256_or_ps(_mm256_cmp_ps(_mm256_sub_ps(tt, e), _mm256_set1_ps(tmax), _CMP_GT_OQ),
