@@ -135,7 +135,8 @@ int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
 /* The sum of one triangle's three edge bounds for its t bound,
  * 2 K (hA + hB + hC) + 3 c0 (2K exact, 3 c0 and the FMA one rounding each,
  * inside the 1 % of SC_EXACT_K202), with K and c0 from the triangle's own
- * S (sc_exact_consts' formulas) where that is below the ray's. The derivation (tri_exact.c) needs S >= |a|_1, a = fl(P - O), for
+ * S (sc_exact_consts' formulas) where that is below the ray's. The
+ * derivation (tri_exact.c) needs S >= |a|_1, a = fl(P - O), for
  * the vertices of the edges it bounds, not for the whole root box: here
  * |a|_1 <= h + (1 + |Sx| + |Sy|) |a_kz| (the shear undone; h = |Px| + |Py|),
  * evaluated here in float: sums of positive terms with at most four
@@ -146,11 +147,11 @@ int sc_exact_cmp_t(const sc_ray *r, const float a[9], const float b[9]);
  * overstates the error by the model's size over the hit's distance, and a
  * t bound that loose sends the hit to sc_exact_finish's double recompute
  * (a third of the random rays' hits on the bunny). Only the t bound uses
- * it, on every lane whose edges are certain: those are a few a ray, and a
- * branch on whether the ray's own bound is wide mispredicted on rays that
- * start inside the model (it was for 40-99 % of such lanes; random rays
- * 4-9 % faster without it, docs/compare.md, fortieth session). The edges
- * are certified with E1, whose one bound per ray costs nothing per lane. */
+ * it, on every lane whose edges are certain, without a branch on whether
+ * the ray's own bound is wide: for rays that start at or inside the model
+ * that branch goes either way from leaf to leaf and mispredicts
+ * (docs/compare.md, fortieth session). The edges are certified with E1,
+ * whose one bound per ray costs nothing per lane. */
 SC_TRACE_INLINE float sc_exact_local_bound(float xK, float xc0, float Sx, float Sy, float hA, float hB, float hC,
                                            float Akz, float Bkz, float Ckz)
 {
