@@ -109,15 +109,24 @@ static inline double sc_top_grow(const sc_top *T, const sc_ray *r, double *m_out
     return sc_top_growth(T, m);
 }
 
-/* The object-space ray of an item: M^-1 (o - T), M^-1 d in double, rounded once. */
+/* The object-space ray of an item: M^-1 (o - T), M^-1 d in double, rounded
+ * once. With SSE2 each half of it (org, tmin and dir, tmax) is written by
+ * one 16-byte store: the kernels load each half as one register
+ * (ctx_init_fast), which a load can take from one store in flight but not
+ * from several smaller ones (docs/compare.md, forty-first session). */
 static inline void sc_top_object_ray(const double *inv, const sc_ray *r, sc_ray *o)
 {
+    float p[3], d[3];
     for (int i = 0; i < 3; i++) {
-        o->org[i] = sc_top_xfm_point(inv + 4 * i, r->org[0], r->org[1], r->org[2]);
-        o->dir[i] = sc_top_xfm_dir(inv + 4 * i, r->dir[0], r->dir[1], r->dir[2]);
+        p[i] = sc_top_xfm_point(inv + 4 * i, r->org[0], r->org[1], r->org[2]);
+        d[i] = sc_top_xfm_dir(inv + 4 * i, r->dir[0], r->dir[1], r->dir[2]);
     }
-    o->tmin = r->tmin;
-    o->tmax = r->tmax;
+#if defined(__SSE2__)
+    _mm_storeu_ps((float *)(void *)o, _mm_setr_ps(p[0], p[1], p[2], r->tmin));
+    _mm_storeu_ps((float *)(void *)o + 4, _mm_setr_ps(d[0], d[1], d[2], r->tmax));
+#else
+    *o = (sc_ray){ { p[0], p[1], p[2] }, r->tmin, { d[0], d[1], d[2] }, r->tmax };
+#endif
 }
 
 /* Bounds under which an item's object ray (sc_top_object_ray) is surely

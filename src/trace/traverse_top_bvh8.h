@@ -38,26 +38,6 @@ static inline void top_ctx_init(trace_ctx *c, const sc_top *T, const sc_ray *r)
 }
 #endif
 
-#ifdef SC_X86_INLINE
-/* sc_top_object_ray (the same bits) with each half of the ray (org, tmin
- * and dir, tmax) written by one 16-byte store: the kernels load each half
- * as one register (ctx_init_fast), which a load can take from one store in
- * flight but not from several smaller ones (docs/compare.md, forty-first
- * session). */
-SC_X86_INLINE void top_object_ray(const double *inv, const sc_ray *w, sc_ray *o)
-{
-    float p[3], d[3];
-    for (int i = 0; i < 3; i++) {
-        p[i] = sc_top_xfm_point(inv + 4 * i, w->org[0], w->org[1], w->org[2]);
-        d[i] = sc_top_xfm_dir(inv + 4 * i, w->dir[0], w->dir[1], w->dir[2]);
-    }
-    _mm_storeu_ps((float *)(void *)o, _mm_setr_ps(p[0], p[1], p[2], w->tmin));
-    _mm_storeu_ps((float *)(void *)o + 4, _mm_setr_ps(d[0], d[1], d[2], w->tmax));
-}
-#else
-#define top_object_ray sc_top_object_ray
-#endif
-
 /* One item against the ray: its hit into *best when better (closest: then
  * returns 1), or 1 if it occludes (any). INC: the world ray is one of many
  * in changing directions, so its object rays take the one-body kernel
@@ -72,7 +52,7 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
         return 0;
     sc_ray r;
     if (it->inv) {
-        top_object_ray(it->inv, ray, &r);
+        sc_top_object_ray(it->inv, ray, &r);
         if (!sc_top_surely_valid(it, om, dm) && !sc_ray_valid(&r))
             return 0;
     } else {
