@@ -8,6 +8,12 @@
 /* Deepest stack a traversal can need: every level of the binary build tree
  * pushes at most 7 siblings. */
 #define SC_TRACE_STACK (SC_BVH_MAX_DEPTH * (SC_BVH_N - 1) + SC_BVH_N)
+/* A walk that replaces the stack's top by its hit children before visiting
+ * it (traverse_bvh8_single.h) does so only while at most SC_TRACE_STACK - 8
+ * entries are held, so it holds at most SC_TRACE_STACK - 1 after; what the
+ * walk pushes from there are siblings of its path below the node of then,
+ * at most SC_TRACE_STACK more. */
+#define SC_TRACE_STACK_SPECULATE (2 * SC_TRACE_STACK)
 
 typedef struct sc_stack_entry {
     uint64_t ref;
