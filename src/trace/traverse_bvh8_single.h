@@ -225,6 +225,7 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
      * high-quality trees, whose siblings overlap less and are culled more
      * often once a hit is found, 1-5 % slower, and camera rays slower in
      * both (docs/compare.md, forty-second session). */
+    /* a constant 0 in every other kernel, where the branch below compiles away */
     const int speculate = OCT == SC_OCT_ANY && !ANY && bvh->quality == SC_BUILD_QUALITY_MEDIUM;
     sc_stack_entry stack[SC_TRACE_STACK_SPECULATE];
     int sp = 0;
@@ -249,8 +250,8 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
             /* OCT = -2: a parallel ray (ray_setup.h); the counting
              * kernels (OCT = -1) decide per ray */
             unsigned m;
-            if (OCT == SC_OCT_ANY && !ANY && speculate && sp > 0 && sp <= SC_TRACE_STACK - SC_BVH_N &&
-                !sc_ref_is_leaf(stack[sp - 1].ref) && stack[sp - 1].dist <= tmax) {
+            if (speculate && sp > 0 && sp <= SC_TRACE_STACK - SC_BVH_N && !sc_ref_is_leaf(stack[sp - 1].ref) &&
+                stack[sp - 1].dist <= tmax) {
                 /* The stack's top is visited after this node's subtree,
                  * whatever that finds: its test runs now, beside this
                  * node's, where the two chains of loads overlap, and its
