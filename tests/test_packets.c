@@ -567,6 +567,90 @@ static void test_streams(void **state)
     tmesh_free(&m);
 }
 
+/* Bounce runs: 16 rays from points close together on a sphere (inside and
+ * outside, as a tile's bounces off a closed mesh), in directions spread over
+ * the hemisphere of the normal. The gather calls them SC_GATHER_NEAR (near
+ * origins, directions not narrow), and a closest-hit stream sends each such
+ * run as a packet or one by one, whichever its thread has timed faster, and
+ * times both paths once every 16 such runs (sc_stream_run): whatever the
+ * timings, on every ISA level, over calls that carry the history from one
+ * to the next, every ray gets the single-ray kernel's answer. */
+static void bounce_run(sc_ray *r, sc_rng *g, int inside)
+{
+    double p[3], len = 0;
+    for (int k = 0; k < 3; k++)
+        p[k] = sc_rng_range(g, -1, 1), len += p[k] * p[k];
+    len = sqrt(len);
+    for (int i = 0; i < 16; i++) {
+        double o[3], n[3], d[3], dn = 0;
+        for (int k = 0; k < 3; k++) {
+            n[k] = (inside ? -1 : 1) * p[k] / len;
+            o[k] = p[k] / len * (inside ? 0.999 : 1.001) + 0.01 * sc_rng_range(g, -1, 1);
+            d[k] = sc_rng_range(g, -1, 1);
+            dn += d[k] * n[k];
+        }
+        for (int k = 0; k < 3; k++)
+            d[k] += (dn < 0 ? 2 * -dn : 0) * n[k] + 0.05 * n[k];   /* into the normal's hemisphere */
+        set_ray(&r[i], o, d, 0, INFINITY);
+    }
+}
+
+static void test_stream_bounces(void **state)
+{
+    (void)state;
+    tmesh m = { 0 };
+    const double c[3] = { 0, 0, 0 };
+    scene_icosphere(&m, 3, 1.0, c);
+    enum { RUNS = 96, N = 16 * RUNS };
+    sc_ray *r = malloc(N * sizeof *r);
+    sc_hitrec *ref = malloc(N * sizeof *ref), *h = malloc(N * sizeof *h);
+    sc_rng g;
+    sc_rng_seed(&g, 41);
+    const float lo[3] = { -1, -1, -1 }, hi[3] = { 1, 1, 1 };
+    size_t near = 0;
+    for (int run = 0; run < RUNS; run++) {
+        bounce_run(r + 16 * run, &g, run % 3 == 0);
+        sc_ray_packet16 p __attribute__((aligned(64)));
+        near += sc_stream_gather16_ref((const char *)(r + 16 * run), sizeof *r, lo, hi, &p) == SC_GATHER_NEAR;
+    }
+    assert_int_equal(near, RUNS);   /* every run is a bounce run */
+    const sc_isa start = sc_isa_active();
+    for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
+        assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
+        sc_bvh *bvh = build(&m, 8, SC_PREFILTER_OFF, (sc_tri_test)tt);
+        size_t hits = 0;
+        for (size_t i = 0; i < N; i++) {
+            assert_int_equal(sc_trace_closest(bvh, &r[i], &ref[i], NULL), SC_OK);
+            hits += ref[i].prim != SC_HITREC_MISS;
+        }
+        assert_true(hits > N / 8 && hits < N);   /* both answers occur */
+        for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+            if (!sc_isa_supported((sc_isa)isa))
+                continue;
+            assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+            /* whole, then in calls of 5 runs and a part, the history going on */
+            for (int pass = 0; pass < 2; pass++) {
+                memset(h, 0x5a, N * sizeof *h);
+                const size_t step = pass ? 16 * 5 + 7 : N;
+                for (size_t b = 0; b < N; b += step)
+                    assert_int_equal(sc_trace_closest_n(bvh, r + b, sizeof *r, h + b, sizeof *h,
+                                                        N - b < step ? N - b : step, 0, NULL),
+                                     SC_OK);
+                size_t bad = 0;
+                for (size_t i = 0; i < N; i++)
+                    bad += memcmp(&h[i], &ref[i], sizeof ref[i]) != 0;
+                if (bad)
+                    fail_msg("%s %s pass %d: %zu of %d bounce rays differ from the single-ray kernel",
+                             sc_tri_test_name((sc_tri_test)tt), sc_isa_name((sc_isa)isa), pass, bad, N);
+            }
+        }
+        sc_bvh_free(bvh);
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+    free(r), free(ref), free(h);
+    tmesh_free(&m);
+}
+
 /* Coherent any-hit streams go four 16-ray packets at a time through the
  * level's group kernel (any_stream64, traverse_group_any), which walks the
  * tree once for 64 rays. Shadow-like runs (origins within a small box that
@@ -1328,6 +1412,7 @@ int main(void)
         cmocka_unit_test(test_other_tests),
         cmocka_unit_test(test_streams),
         cmocka_unit_test(test_streams_incoherent),
+        cmocka_unit_test(test_stream_bounces),
         cmocka_unit_test(test_stream_groups),
         cmocka_unit_test(test_stream_gather),
         cmocka_unit_test(test_packet_valid),

@@ -25,11 +25,14 @@
 #define SC_STREAM_ORIGINS (1.0f / 16)
 
 /* What stream_gather16 found. */
-enum { SC_GATHER_REFUSED = -1, SC_GATHER_INCOHERENT = 0, SC_GATHER_COHERENT = 1 };
+enum { SC_GATHER_REFUSED = -1, SC_GATHER_INCOHERENT = 0, SC_GATHER_COHERENT = 1, SC_GATHER_NEAR = 2 };
 
 /* Rays 0..15 at ray_stride bytes from rays into p's rows; lo, hi: the
  * scene's box. SC_GATHER_REFUSED if a ray fails sc_ray_valid (p is then
- * partly written), else whether the run is coherent. */
+ * partly written), else whether the run is coherent: SC_GATHER_COHERENT
+ * for narrow directions, SC_GATHER_NEAR for near origins whose directions
+ * are not narrow (a tile's bounces, which the stream may still send one by
+ * one: sc_stream_run), SC_GATHER_INCOHERENT for neither. */
 static inline int sc_stream_gather16_ref(const char *rays, size_t ray_stride, const float *lo, const float *hi,
                                          sc_ray_packet16 *p)
 {
@@ -57,7 +60,7 @@ static inline int sc_stream_gather16_ref(const char *rays, size_t ray_stride, co
         narrow &= dhi[a] - dlo[a] <= SC_STREAM_SPREAD;
         near &= ohi[a] - olo[a] <= SC_STREAM_ORIGINS * (hi[a] - lo[a]);
     }
-    return narrow || near ? SC_GATHER_COHERENT : SC_GATHER_INCOHERENT;
+    return narrow ? SC_GATHER_COHERENT : near ? SC_GATHER_NEAR : SC_GATHER_INCOHERENT;
 }
 
 #endif

@@ -75,8 +75,9 @@ static SC_TARGET int stream_gather16(const char *rays, size_t ray_stride, const 
         narrow = _mm256_and_ps(narrow, spread_within8(dlo[a], dhi[a], SC_STREAM_SPREAD));
         near = _mm256_and_ps(near, spread_within8(olo[a], ohi[a], SC_STREAM_ORIGINS * (hi[a] - lo[a])));
     }
-    return _mm256_movemask_ps(narrow) == 0xff || _mm256_movemask_ps(near) == 0xff ? SC_GATHER_COHERENT
-                                                                                 : SC_GATHER_INCOHERENT;
+    return _mm256_movemask_ps(narrow) == 0xff ? SC_GATHER_COHERENT
+           : _mm256_movemask_ps(near) == 0xff ? SC_GATHER_NEAR
+                                              : SC_GATHER_INCOHERENT;
 }
 
 #endif

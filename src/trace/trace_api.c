@@ -6,8 +6,12 @@
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
+#if defined(__x86_64__) || defined(__i386__)
+#include <x86intrin.h>
+#endif
 
 #include "bvh/bvh_internal.h"
+#include "common/sc_clock.h"
 #include "isa/isa_dispatch.h"
 #include "ray_setup.h"
 #include "stream_gather.h"
@@ -264,31 +268,30 @@ static void queue_flush(const sc_stream_target *T, stream_queue *q, int any)
 #define OUT(j) (out + (base + (j)) * out_stride)
 
 /* Rays [base, base + cnt) (cnt <= 16) into the packet p with its lanes:
- * 1 if they go as a packet; 0 if they go one by one (the coherence tests
- * failed, or a ray is refused). */
+ * SC_GATHER_COHERENT or SC_GATHER_NEAR if they may go as a packet (the
+ * tail of a stream is always a coherent packet), else SC_GATHER_INCOHERENT
+ * (one by one: the coherence tests failed, or a ray is refused). */
 static int stream_gather(const sc_stream_target *T, const char *rays, size_t ray_stride, size_t base, unsigned cnt,
                          sc_ray_packet16 *p, uint32_t *lanes)
 {
     if (cnt == 16) {
         if (pair_incoherent(RAY(0), RAY(15), T->lo, T->hi))
-            return 0;
+            return SC_GATHER_INCOHERENT;
         const int g = sc_kernels_active()->trace[0].stream_gather16(rays + base * ray_stride, ray_stride, T->lo,
                                                                       T->hi, p);
-        if (g != SC_GATHER_COHERENT)
-            return 0;
         *lanes = 0xffff;
-        return 1;
+        return g == SC_GATHER_REFUSED ? SC_GATHER_INCOHERENT : g;
     }
     /* the tail of the stream; the unused lanes repeat its last ray */
     for (unsigned i = 0; i < 16; i++) {
         const sc_ray *r = RAY(i < cnt ? i : cnt - 1);
         if (i < cnt && !sc_ray_valid(r))
-            return 0;
+            return SC_GATHER_INCOHERENT;
         p->ox[i] = r->org[0], p->oy[i] = r->org[1], p->oz[i] = r->org[2], p->tmin[i] = r->tmin;
         p->dx[i] = r->dir[0], p->dy[i] = r->dir[1], p->dz[i] = r->dir[2], p->tmax[i] = r->tmax;
     }
     *lanes = (1u << cnt) - 1;
-    return 1;
+    return SC_GATHER_COHERENT;
 }
 
 /* Rays [base, base + cnt) one by one: rays the coherence tests sent alone,
@@ -358,6 +361,75 @@ static void group_flush(const sc_stream_target *T, stream_group *g, char *out, s
     g->n = 0;
 }
 
+/* Closest-hit runs with near origins and spread directions (SC_GATHER_NEAR:
+ * a tile's bounces) go as a packet or one by one, whichever this thread has
+ * timed faster on this target. Neither wins everywhere: as packets such
+ * runs were 1.3-1.65x our single rays inside Sponza and off fandisk's flat
+ * faces, where the lanes share their first nodes, and 0.87-0.90x off the
+ * scanned meshes, where they part at once (docs/compare.md, forty-third
+ * session). Once every SC_NEAR_PROBE NEAR runs (4 or 16 times as seldom
+ * once one path is 1.25x or 2x ahead) two neighbouring runs, which cost
+ * about the same, take one path each and are timed (the time-stamp counter;
+ * the monotonic clock off x86); a decayed mean of the pairs' log ratios
+ * picks the path of the other runs. Pairs, because a run's cost changes
+ * across an image more than between the paths: a mean cost per path, from
+ * runs of other parts of the image, picked the wrong one. Both paths give
+ * the same hits; only the speed depends on the history. Not with
+ * statistics (counts should not depend on timing), nor in trees whose
+ * lone rays wait for the interleaved batch (a run cannot be timed there),
+ * nor for any-hit runs, which keep the packets' grouping. Thread-local,
+ * initial-exec, as the octant history (traverse_bvh8_single.h); reset when
+ * the target or the ISA level changes. */
+#define SC_NEAR_PROBE 16
+typedef struct near_history {
+    const void *obj, *isa;   /* the target and the kernel table the history is of */
+    uint32_t runs;       /* NEAR runs since it was reset */
+    float score;         /* decayed mean of log2(packet time / alone time) over probe pairs: > 0, one by one */
+    float first;         /* the pair's first run: its log2 time, negated if it ran alone */
+    int open;            /* the pair's first run is in, the second not yet */
+} near_history;
+static _Thread_local __attribute__((tls_model("initial-exec"))) near_history sc_near_history;
+
+static inline uint64_t stream_ticks(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    return __rdtsc();
+#else
+    return (uint64_t)(sc_now_seconds() * 1e9);
+#endif
+}
+
+/* This NEAR run's path: bit 0, as a packet; bit 1, timed (a probe). */
+static int near_path(near_history *h, const void *obj)
+{
+    const void *isa = sc_kernels_active();
+    if (h->obj != obj || h->isa != isa)
+        h->obj = obj, h->isa = isa, h->runs = 0, h->score = 0, h->open = 0;
+    /* the further apart the paths, the rarer the probes (2^0.32 = 1.25, 2^1 = 2) */
+    const float gap = fabsf(h->score);
+    const uint32_t period = gap < 0.32f ? SC_NEAR_PROBE : gap < 1 ? 4 * SC_NEAR_PROBE : 16 * SC_NEAR_PROBE;
+    const uint32_t k = h->runs++ % period;
+    if (k < 2)
+        /* a pair: packet then alone on even pairs, alone then packet on odd ones */
+        return 2 | (k ^ ((h->runs / period) & 1) ^ 1);
+    return h->score <= 0;
+}
+
+/* A probe's time (ticks) into the history: the first of a pair waits for
+ * the second. One pair moves the score by at most 1/8 of 2 (a factor of 4). */
+static void near_learn(near_history *h, int path, uint64_t ticks)
+{
+    const float l = log2f((float)ticks + 1), signed_l = (path & 1) ? l : -l;
+    h->open = !h->open;
+    if (h->open) {
+        h->first = signed_l;
+        return;
+    }
+    float r = h->first + signed_l;   /* log2(packet time) - log2(alone time) */
+    r = r > 2 ? 2 : r < -2 ? -2 : r;
+    h->score += (r - h->score) * 0.125f;
+}
+
 sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ray_stride, void *out,
                         size_t out_stride, size_t n, sc_trace_stats *stats, int any)
 {
@@ -371,7 +443,11 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
         sc_ray_packet16 p __attribute__((aligned(64)));
         sc_ray_packet16 *pp = grp ? &grp->p[grp->n] : &p;
         uint32_t lanes;
-        if (stream_gather(T, (const char *)rays, ray_stride, base, cnt, pp, &lanes)) {
+        const int g = stream_gather(T, (const char *)rays, ray_stride, base, cnt, pp, &lanes);
+        near_history *nh = g == SC_GATHER_NEAR && !any && !stats && !q ? &sc_near_history : NULL;
+        const int path = nh ? near_path(nh, T->obj) : g != SC_GATHER_INCOHERENT;
+        const uint64_t t0 = path & 2 ? stream_ticks() : 0;
+        if (path & 1) {
             if (grp) {
                 grp->lanes[grp->n] = lanes, grp->base[grp->n] = base, grp->cnt[grp->n] = cnt;
                 if (++grp->n == 4)
@@ -385,6 +461,8 @@ sc_status sc_stream_run(const sc_stream_target *T, const sc_ray *rays, size_t ra
             if (st != SC_OK)
                 status = st;
         }
+        if (path & 2)
+            near_learn(nh, path, stream_ticks() - t0);
         if (q && q->n > SC_STREAM_QUEUE - 16)
             queue_flush(T, q, any);
     }
