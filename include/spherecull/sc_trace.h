@@ -163,10 +163,14 @@ SC_API sc_status sc_trace_any16(const sc_bvh *bvh, const int32_t valid[16], cons
  * hit_stride (>= sizeof(sc_hitrec); for any: occluded_stride >= 4, an
  * int32_t 1/0 per ray), like rtcIntersect1M / rtcOccluded1M. A run of 16
  * consecutive rays whose directions are close (camera tiles, shadow rays to
- * one light) or whose origins are close (a pixel tile's bounces) is traced
- * as one packet (sc_trace_closest16; for any hit, four such packets of one
- * octant walk the tree together, a node tested once per 64 rays); other
- * runs ray by ray, or, in a tree
+ * one light) is traced as one packet (sc_trace_closest16; for any hit, four
+ * such packets of one octant walk the tree together, a node tested once per
+ * 64 rays); a run whose origins are close (a pixel tile's bounces) too,
+ * except that closest-hit runs in a tree below 6 MiB go as a packet or ray
+ * by ray, whichever the calling thread has timed faster on such runs of
+ * this BVH (it tries both now and then: the speed, never the result,
+ * depends on the history);
+ * other runs ray by ray, or, in a tree
  * larger than the caches (6 MiB of nodes and leaves), several rays at a
  * time with their memory loads overlapping. Keep neighbours in the array
  * neighbours in space, and hand over many rays per call, to gain. Results

@@ -6,9 +6,10 @@
  *
  * Coherent: the directions, scaled to unit L1 length, lie in a box at most
  * SC_STREAM_SPREAD wide on every axis (camera tiles, a tile's shadow rays to
- * one light), or the origins lie within SC_STREAM_ORIGINS of the scene's
- * extent on every axis (the bounces of one pixel tile: the packet kernel
- * hands the lanes that part ways to the single-ray kernel). Random rays pass
+ * one light). Near: not that, but the origins lie within SC_STREAM_ORIGINS
+ * of the scene's extent on every axis (the bounces of one pixel tile: the
+ * packet kernel hands the lanes that part ways to the single-ray kernel, and
+ * the stream may send the run one by one instead). Random rays pass
  * neither and go one by one, which measured 1.4x faster for them than packets
  * (docs/compare.md, "Packets and streams"). Coherence only chooses the path:
  * packets and single rays give the same hits. */
