@@ -571,10 +571,11 @@ static void test_streams(void **state)
  * outside, as a tile's bounces off a closed mesh), in directions spread over
  * the hemisphere of the normal. The gather calls them SC_GATHER_NEAR (near
  * origins, directions not narrow), and a closest-hit stream sends each such
- * run as a packet or one by one, whichever its thread has timed faster, and
- * times both paths once every 16 such runs (sc_stream_run): whatever the
- * timings, on every ISA level, over calls that carry the history from one
- * to the next, every ray gets the single-ray kernel's answer. */
+ * run as a packet or one by one, whichever its thread has timed faster; its
+ * first two such runs on a BVH and ISA level take one path each, and later
+ * ones either, as the timings fall (sc_stream_run): whatever the timings,
+ * on every ISA level, over calls that carry the history from one to the
+ * next, every ray gets the single-ray kernel's answer. */
 static void bounce_run(sc_ray *r, sc_rng *g, int inside)
 {
     double p[3], len = 0;
