@@ -403,6 +403,21 @@ static void test_api(void **state)
     tmesh_free(&m);
 }
 
+/* The scalar specification's single-ray answers for n rays (closest hits
+ * into ref; any-hit answers into ref_occ unless NULL), checking that the
+ * set has both hits and misses. The caller has forced the scalar level. */
+static void scalar_reference(const sc_bvh *bvh, const sc_ray *rays, size_t n, sc_hitrec *ref, int *ref_occ)
+{
+    size_t hits = 0;
+    for (size_t i = 0; i < n; i++) {
+        assert_int_equal(sc_trace_closest(bvh, &rays[i], &ref[i], NULL), SC_OK);
+        if (ref_occ)
+            assert_int_equal(sc_trace_any(bvh, &rays[i], &ref_occ[i], NULL), SC_OK);
+        hits += ref[i].prim != SC_HITREC_MISS;
+    }
+    assert_true(hits > n / 8 && hits < n);      /* both answers occur */
+}
+
 /* Incoherent runs of a stream go one by one through sc_trace_closest's
  * kernel (which takes the one body after rays of changing octants) and
  * any_incoherent (no octant branch): on every ISA level and triangle test
@@ -424,13 +439,7 @@ static void test_streams_incoherent(void **state)
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
         assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
         sc_bvh *bvh = build(&m, 8, SC_PREFILTER_OFF, (sc_tri_test)tt);
-        size_t hits = 0;
-        for (size_t i = 0; i < n; i++) {
-            assert_int_equal(sc_trace_closest(bvh, &b.rays[i], &ref[i], NULL), SC_OK);
-            assert_int_equal(sc_trace_any(bvh, &b.rays[i], &ref_occ[i], NULL), SC_OK);
-            hits += ref[i].prim != SC_HITREC_MISS;
-        }
-        assert_true(hits > n / 8 && hits < n);      /* both answers occur */
+        scalar_reference(bvh, b.rays, n, ref, ref_occ);
         for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
             if (!sc_isa_supported((sc_isa)isa))
                 continue;
@@ -619,12 +628,7 @@ static void test_stream_bounces(void **state)
     for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++) {
         assert_int_equal(sc_isa_force(SC_ISA_SCALAR), SC_OK);
         sc_bvh *bvh = build(&m, 8, SC_PREFILTER_OFF, (sc_tri_test)tt);
-        size_t hits = 0;
-        for (size_t i = 0; i < N; i++) {
-            assert_int_equal(sc_trace_closest(bvh, &r[i], &ref[i], NULL), SC_OK);
-            hits += ref[i].prim != SC_HITREC_MISS;
-        }
-        assert_true(hits > N / 8 && hits < N);   /* both answers occur */
+        scalar_reference(bvh, r, N, ref, NULL);
         for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
             if (!sc_isa_supported((sc_isa)isa))
                 continue;
