@@ -16,7 +16,7 @@
  *
  *   bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R]
  *               [--refits K] [--threads T] [--min-time S] [--rows LIST]
- *               [--identity] [--plain]
+ *               [--identity] [--plain] [--shuffle]
  * Each timed row runs its ray set until the faster tracer has run S
  * seconds (default 0.2), the same number of passes for both. --rows
  * (comma-separated row names, e.g. primary16) times only those rows of
@@ -25,7 +25,10 @@
  * scale); --plain traces the mesh itself in both tracers' world scenes
  * instead of instances, with the rays of one instance. What the instance
  * level costs each tracer is then --instances 1 --identity against
- * --plain: the same geometry and the same rays, with and without it. */
+ * --plain: the same geometry and the same rays, with and without it.
+ * --shuffle puts each ray set in a seeded random order (the packets then
+ * take 16 rays from anywhere in the image): the control for what depends
+ * on neighbouring rays being alike, such as the occluder tried first. */
 #define _GNU_SOURCE
 #include <embree3/rtcore.h>
 #include <getopt.h>
@@ -52,7 +55,7 @@ static double min_time = 0.2;
 static const char *const row_names[] = { "primary", "shadow", "diffuse", "primary16", "shadow16", "diffuse16" };
 enum { ROW_COUNT = sizeof row_names / sizeof row_names[0] };
 static unsigned rows_wanted = (1u << ROW_COUNT) - 1;
-static int identity_xfm, plain_mesh;   /* --identity, --plain */
+static int identity_xfm, plain_mesh, shuffle_rays;   /* --identity, --plain, --shuffle */
 /* Our builds and refits: the default configuration on --threads threads. */
 static sc_bvh_config build_cfg;
 static bool monitor(void *ptr, ssize_t bytes, bool post)
@@ -74,6 +77,19 @@ typedef struct ray_sets {
     sc_ray *primary, *shadow, *diffuse;
     size_t n, nshadow, ndiffuse;
 } ray_sets;
+
+/* A seeded random order (Fisher-Yates), for --shuffle. */
+static void shuffle(sc_ray *r, size_t n, uint64_t seed)
+{
+    sc_rng rng;
+    sc_rng_seed(&rng, seed);
+    for (size_t i = n; i > 1; i--) {
+        const size_t j = (size_t)sc_rng_range(&rng, 0, (double)i);
+        const sc_ray t = r[i - 1];
+        r[i - 1] = r[j < i ? j : i - 1];
+        r[j < i ? j : i - 1] = t;
+    }
+}
 
 /* Camera rays from outside the box at (1, 0.7, 1.3) times its size, then
  * shadow and cosine-weighted diffuse rays from the hits `trace` reports. */
@@ -151,6 +167,11 @@ static void make_rays(const float lo[3], const float hi[3], int w, int h, const 
         for (int k = 0; k < 3; k++)
             d.dir[k] = (float)(sr * cos(a1) * b1[k] + sr * sin(a1) * b2[k] + sqrt(1 - r2) * n[k]);
         rs->diffuse[rs->ndiffuse++] = d;
+    }
+    if (shuffle_rays) {
+        shuffle(rs->primary, rs->n, 1);
+        shuffle(rs->shadow, rs->nshadow, 2);
+        shuffle(rs->diffuse, rs->ndiffuse, 3);
     }
 }
 
@@ -593,6 +614,7 @@ int main(int argc, char **argv)
                                           { "rows", required_argument, 0, 'R' },
                                           { "identity", no_argument, 0, 'I' },
                                           { "plain", no_argument, 0, 'P' },
+                                          { "shuffle", no_argument, 0, 'S' },
                                           { 0, 0, 0, 0 } };
     int o;
     while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
@@ -609,6 +631,7 @@ int main(int argc, char **argv)
         case 'T': min_time = atof(optarg); break;
         case 'I': identity_xfm = 1; break;
         case 'P': plain_mesh = 1; break;
+        case 'S': shuffle_rays = 1; break;
         case 'R': {
             /* a copy for strtok_r, as the CLI's comma lists */
             char buf[256];
@@ -626,7 +649,7 @@ int main(int argc, char **argv)
                 die("--rows: an empty list");
             break;
         }
-        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST] [--identity] [--plain]");
+        default: die("usage: bench_scene [--mesh SPEC] [--instances N] [--size WxH] [--repeats R] [--refits K] [--threads T] [--min-time S] [--rows LIST] [--identity] [--plain] [--shuffle]");
         }
     }
     if (plain_mesh && ninst != 1)
