@@ -1492,6 +1492,169 @@ static void test_packets(void **state)
     mesh_free(&tor), mesh_free(&box), mesh_free(&ground);
 }
 
+/* An any-hit ray first tries the instance that last occluded one on its
+ * thread (traverse_top_bvh8.h), single rays and packets; the answers must
+ * not depend on that. A unit quad instanced 64 times at z = 1 (an 8 x 8
+ * grid, 2 apart, gaps between), once more at z = 5 over instance 41, and
+ * once scaled over [-4, 8]^2 at z = 3; rays go up from z = 0, so every
+ * answer is known from the geometry. After rays blocked by instance 41
+ * (and 65 above it), a ray they block visits fewer nodes than after rays
+ * blocked by instance 7 (the remembered one is tried first: no top node),
+ * and each case runs with it tried first: a gap (the large quad blocks, or
+ * nothing), 41 beyond tmax, 41 before tmin (65 blocks), both before tmin,
+ * pointing away, another instance; as single rays and in packets of 16
+ * (one narrow enough to walk the top tree together, whose lanes 41 alone
+ * or 65 alone blocks, one not). Then a
+ * scene of 2 instances, perhaps at the same address: a remembered index
+ * of 7 or more is out of its range and must not be read. On every level. */
+static sc_ray up(double x, double y, float tmin, float tmax, float dz)
+{
+    return (sc_ray){ { (float)x, (float)y, 0 }, tmin, { 0, 0, dz }, tmax };
+}
+
+static void warm(const sc_accel *a, double x, double y)
+{
+    for (int w = 0; w < 24; w++) {
+        const sc_ray r = up(x + 0.01 * w, y, 0, INFINITY, 1);
+        int occ = -1;
+        assert_int_equal(sc_accel_any(a, &r, &occ, NULL), SC_OK);
+        assert_int_equal(occ, 1);
+    }
+}
+
+static void test_occluder_memory(void **state)
+{
+    (void)state;
+    const float quad_pos[12] = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0 };
+    const uint32_t quad_idx[6] = { 0, 1, 2, 0, 2, 3 };
+    const sc_mesh_view quad = { quad_pos, 4, quad_idx, 2, 0, 0 };
+    const struct {
+        sc_ray ray;
+        int blocked;
+    } cases[] = {
+        { up(1.5, 1.5, 0, INFINITY, 1), 1 },     /* a gap under the large quad */
+        { up(9.5, 10.5, 0, INFINITY, 1), 0 },    /* a gap beside it */
+        { up(2.5, 10.5, 0, 0.5f, 1), 0 },        /* 41 beyond tmax */
+        { up(2.5, 10.5, 1.5f, INFINITY, 1), 1 }, /* 41 before tmin: 65 */
+        { up(2.5, 10.5, 5.5f, INFINITY, 1), 0 }, /* both before tmin */
+        { up(14.5, 0.5, 0, INFINITY, 1), 1 },    /* instance 7 */
+        { up(2.5, 10.5, 0, INFINITY, -1), 0 },   /* away */
+    };
+    const size_t ncases = sizeof cases / sizeof cases[0];
+    /* 16 lanes within 1.1 of each other (narrow), tilted off the axes
+     * (a lane parallel to one goes alone), then 16 of the cases. Lanes
+     * whose tmin and tmax let 41 and 65 block them, 65 only, 41 only, or
+     * neither: whichever is remembered, some lanes need the walk. */
+    sc_ray narrow[16], wide[16];
+    int32_t narrow_want[16], wide_want[16];
+    for (int l = 0; l < 16; l++) {
+        const float tmin[4] = { 0, 1.5f, 0, 0 }, tmax[4] = { INFINITY, INFINITY, 3, 0.5f };
+        narrow[l] = up(1.86 + 0.07 * l, 10.2 + 0.03 * l, tmin[l % 4], tmax[l % 4], 1);
+        narrow[l].dir[0] = 0.01f, narrow[l].dir[1] = 0.013f;
+        narrow_want[l] = 0;
+        for (int z = 1; z <= 5; z += 4) {   /* 41 at z = 1, 65 at z = 5, both over [2, 3] x [10, 11] */
+            const double x = narrow[l].org[0] + z * (double)narrow[l].dir[0];
+            const double y = narrow[l].org[1] + z * (double)narrow[l].dir[1];
+            assert_true(fabs(x - 2) > 1e-3 && fabs(x - 3) > 1e-3 && fabs(y - 10) > 1e-3 && fabs(y - 11) > 1e-3);
+            if (x > 2 && x < 3 && y > 10 && y < 11 && z >= narrow[l].tmin && z <= narrow[l].tmax)
+                narrow_want[l] = 1;
+        }
+        wide[l] = cases[l % ncases].ray;
+        wide_want[l] = cases[l % ncases].blocked;
+    }
+    const sc_isa start = sc_isa_active();
+    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
+        if (!sc_isa_supported((sc_isa)isa))
+            continue;
+        assert_int_equal(sc_isa_force((sc_isa)isa), SC_OK);
+        sc_bvh_config cfg;
+        sc_bvh_config_default(&cfg);
+        sc_accel *obj, *world;
+        assert_int_equal(sc_accel_new(&cfg, &obj), SC_OK);
+        assert_int_equal(sc_accel_attach_mesh(obj, &quad, SC_ACCEL_SHARED, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(obj), SC_OK);
+        assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+        for (int i = 0; i < 64; i++) {
+            const float x[12] = { 1, 0, 0, (float)(2 * (i % 8)), 0, 1, 0, (float)(2 * (i / 8)), 0, 0, 1, 1 };
+            assert_int_equal(sc_accel_attach_instance(world, obj, x, NULL), SC_OK);
+        }
+        const float above41[12] = { 1, 0, 0, 2, 0, 1, 0, 10, 0, 0, 1, 5 };
+        const float big[12] = { 12, 0, 0, -4, 0, 12, 0, -4, 0, 0, 1, 3 };
+        assert_int_equal(sc_accel_attach_instance(world, obj, above41, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_instance(world, obj, big, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(world), SC_OK);
+
+        /* tried first: fewer nodes, single rays and a packet */
+        const sc_ray r41 = up(2.5, 10.5, 0, INFINITY, 1);
+        sc_ray_packet16 p16;
+        int32_t valid[16], o16[16];
+        sc_ray all41[16];
+        for (int l = 0; l < 16; l++) {
+            all41[l] = up(2.1 + 0.05 * l, 10.5, 0, INFINITY, 1);
+            all41[l].dir[0] = 0.01f, all41[l].dir[1] = 0.013f;
+        }
+        pack_rays(all41, &p16, NULL, valid);
+        sc_trace_stats cold = { 0 }, hot = { 0 }, pcold = { 0 }, phot = { 0 };
+        int occ = -1;
+        warm(world, 14.3, 0.5);
+        assert_int_equal(sc_accel_any(world, &r41, &occ, &cold), SC_OK);
+        assert_int_equal(occ, 1);
+        warm(world, 14.3, 0.5);
+        assert_int_equal(sc_accel_any16(world, valid, &p16, o16, &pcold), SC_OK);
+        warm(world, 2.3, 10.5);
+        assert_int_equal(sc_accel_any(world, &r41, &occ, &hot), SC_OK);
+        assert_int_equal(occ, 1);
+        warm(world, 2.3, 10.5);
+        assert_int_equal(sc_accel_any16(world, valid, &p16, o16, &phot), SC_OK);
+        for (int l = 0; l < 16; l++)
+            assert_int_equal(o16[l], 1);
+        assert_true(hot.nodes < cold.nodes);
+        assert_true(phot.nodes < pcold.nodes);
+
+        for (size_t k = 0; k < ncases; k++) {
+            for (int c = 0; c < 2; c++) {
+                warm(world, 2.3, 10.5);
+                assert_int_equal(sc_accel_any(world, &cases[k].ray, &occ, c ? &hot : NULL), SC_OK);
+                if (occ != cases[k].blocked)
+                    print_message("%s: case %zu occluded %d\n", sc_isa_name((sc_isa)isa), k, occ);
+                assert_int_equal(occ, cases[k].blocked);
+            }
+        }
+        for (int c = 0; c < 2; c++) {
+            const sc_ray *set = c ? wide : narrow;
+            const int32_t *want = c ? wide_want : narrow_want;
+            pack_rays(set, &p16, NULL, valid);
+            warm(world, 2.3, 10.5);
+            assert_int_equal(sc_accel_any16(world, valid, &p16, o16, NULL), SC_OK);
+            for (int l = 0; l < 16; l++) {
+                if (o16[l] != want[l])
+                    print_message("%s: %s packet lane %d occluded %d\n", sc_isa_name((sc_isa)isa),
+                                  c ? "wide" : "narrow", l, o16[l]);
+                assert_int_equal(o16[l], want[l]);
+                warm(world, 2.3, 10.5);
+                assert_int_equal(sc_accel_any(world, &set[l], &occ, NULL), SC_OK);
+                assert_int_equal(occ, want[l]);
+            }
+        }
+        sc_accel_release(world);
+
+        /* two instances: the remembered index is out of range */
+        assert_int_equal(sc_accel_new(&cfg, &world), SC_OK);
+        const float x0[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 1 };
+        assert_int_equal(sc_accel_attach_instance(world, obj, x0, NULL), SC_OK);
+        assert_int_equal(sc_accel_attach_instance(world, obj, above41, NULL), SC_OK);
+        assert_int_equal(sc_accel_commit(world), SC_OK);
+        const sc_ray r1 = up(2.5, 10.5, 0, 4, 1), r2 = up(2.5, 10.5, 0, INFINITY, 1);
+        assert_int_equal(sc_accel_any(world, &r1, &occ, NULL), SC_OK);
+        assert_int_equal(occ, 0);
+        assert_int_equal(sc_accel_any(world, &r2, &occ, NULL), SC_OK);
+        assert_int_equal(occ, 1);
+        sc_accel_release(world);
+        sc_accel_release(obj);
+    }
+    assert_int_equal(sc_isa_force(start), SC_OK);
+}
+
 int main(void)
 {
     (void)each_shared_scene;
@@ -1505,6 +1668,7 @@ int main(void)
         cmocka_unit_test(test_refused_object_rays),
         cmocka_unit_test(test_refit),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_occluder_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -358,6 +358,7 @@ static sc_status build_top(sc_accel *a)
     }
     a->top.nodes = nodes;
     a->top.items = a->items;
+    a->top.item_count = (uint32_t)nitems;
     a->top.kappa = 1;
     a->top.radius = 0;
     size_t n = 0;

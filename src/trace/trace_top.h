@@ -44,6 +44,7 @@ typedef struct sc_top_item {
 typedef struct sc_top {
     const sc_bvh_node8 *nodes;   /* nodes[0] is the root */
     const sc_top_item *items;
+    uint32_t item_count;
     float lo[3], hi[3];          /* the top tree's box */
     float center[3], half;       /* the same box: centre, half diagonal (packets' coherence test) */
     double kappa, radius;

@@ -81,6 +81,53 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
     return sc_top_offer(it, b, &h, best);
 }
 
+/* The item that last occluded an any-hit ray on this thread is tried
+ * first by the next one, before the walk, which then skips it (the
+ * "shadow cache" of Haines and Greenberg, 1986): shadow rays from
+ * neighbouring pixels towards one light are mostly blocked by the same
+ * object, often the one they start on. Any occluder gives the same answer,
+ * so only the speed depends on which is tried first. Whether to try it is
+ * learnt per thread, as the octant history is: a score, saturating at 0
+ * and SC_TOP_OCC_MAX, goes up by 2 when the item occluded the ray (tried,
+ * or found by the walk as the occluder) and down by 1 when it did not;
+ * from SC_TOP_OCC_ON the item is tried. So it is tried while it blocks
+ * about a third of the rays or more: below that a failed try, an instance
+ * visit the walk might have culled, costs more than the hits save. Keyed
+ * by the top level, whose item count bounds the index (a scene committed
+ * again, or another at the same address, is at worst a wrong guess).
+ * Thread-local, initial-exec, as the octant history. */
+#define SC_TOP_OCC_ON 8
+#define SC_TOP_OCC_MAX 15
+#define SC_TOP_NO_SKIP (~(uint64_t)0)   /* no top reference is all ones */
+static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
+    const sc_top *T;
+    uint32_t item;
+    int score;
+} sc_top_occ;
+
+/* The reference of the item to try first (SC_REF_LEAF | item), or
+ * SC_TOP_NO_SKIP when none is to be tried. */
+SC_TRAVERSE_INLINE uint64_t top_occ_first(const sc_top *T)
+{
+    return sc_top_occ.T == T && sc_top_occ.item < T->item_count && sc_top_occ.score >= SC_TOP_OCC_ON
+               ? SC_REF_LEAF | sc_top_occ.item
+               : SC_TOP_NO_SKIP;
+}
+
+SC_TRAVERSE_INLINE void top_occ_learn(int blocked)
+{
+    const int s = sc_top_occ.score + (blocked ? 2 : -1);
+    sc_top_occ.score = s < 0 ? 0 : s > SC_TOP_OCC_MAX ? SC_TOP_OCC_MAX : s;
+}
+
+/* Item `item` of T occluded a ray that did not try an item first. */
+SC_TRAVERSE_INLINE void top_occ_found(const sc_top *T, uint32_t item, int tried)
+{
+    if (!tried)
+        top_occ_learn(sc_top_occ.T == T && sc_top_occ.item == item);
+    sc_top_occ.T = T, sc_top_occ.item = item;
+}
+
 /* The walk keeps the node it is in (a single hit child is entered without
  * a push), and a closest-hit walk keeps how far boxes are tested
  * (sc_top_tmax), recomputed only when an item improves the hit. */
@@ -111,6 +158,13 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     sc_top_ray_extent(ray, &om, &dm);
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
+    uint64_t skip = SC_TOP_NO_SKIP;    /* any hit: the item tried first */
+    if (ANY && (skip = top_occ_first(T)) != SC_TOP_NO_SKIP) {
+        const int occ = top_visit(T, (uint32_t)(skip & 0xffffffffu), ray, om, dm, best, st, ANY, INC);
+        top_occ_learn(occ);
+        if (occ)
+            return 1;
+    }
     uint64_t ref = 0;                  /* the root, nodes[0] */
     for (;;) {
         if (!sc_ref_is_leaf(ref)) {
@@ -139,14 +193,19 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
                 }
                 continue;
             }
-        } else if (top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY, INC)) {
-            if (ANY)
+        } else if ((!ANY || ref != skip) && top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY, INC)) {
+            if (ANY) {
+                top_occ_found(T, (uint32_t)(ref & 0xffffffffu), skip != SC_TOP_NO_SKIP);
                 return 1;
+            }
             tcull = sc_top_tmax(best, ray->tmax);
         }
         do {
-            if (sp == 0)
+            if (sp == 0) {
+                if (ANY && skip == SC_TOP_NO_SKIP)
+                    top_occ_learn(0);
                 return 0;
+            }
             sp--;
         } while (!ANY && stack[sp].dist > tcull);
         ref = stack[sp].ref;

@@ -812,6 +812,15 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     P.active = pl;
     top_pk_setup(&P, pl);
     top_pk_far(&P);
+    /* any hit: the item that last occluded a ray on this thread is tried
+     * first with every lane, and skipped by the walk (top_occ_first) */
+    uint64_t skip = SC_TOP_NO_SKIP;
+    int found = 0;
+    if (any && (skip = top_occ_first(T)) != SC_TOP_NO_SKIP) {
+        top_pk_visit(&P, (uint32_t)(skip & 0xffffffffu), pl);
+        top_occ_learn(P.active != pl);
+        found = P.active != pl;
+    }
     /* Each node pushes at most its 8 children, as in the single-ray walk,
      * so the single-ray stack bound holds. */
     top_pk_entry stack[SC_TRACE_STACK];
@@ -823,9 +832,16 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         if (!L)
             continue;
         if (sc_ref_is_leaf(e.ref)) {
+            if (any && e.ref == skip)
+                continue;
+            const uint32_t before = P.active;
             top_pk_visit(&P, (uint32_t)(e.ref & 0xffffffffu), L);
-            if (!any)
+            if (!any) {
                 top_pk_far(&P);
+            } else if (P.active != before && !found) {
+                top_occ_found(T, (uint32_t)(e.ref & 0xffffffffu), skip != SC_TOP_NO_SKIP);
+                found = 1;
+            }
             continue;
         }
         const sc_bvh_node8 *node = &T->nodes[e.ref];
@@ -855,6 +871,8 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
         for (int j = 0; j < n; j++)
             stack[sp++] = (top_pk_entry){ node->child[idx[j]], cl[idx[j]] };
     }
+    if (any && !found && skip == SC_TOP_NO_SKIP)
+        top_occ_learn(0);
 done:
     if (!any)
         top_pk_store(&P, lanes, out);
