@@ -836,105 +836,6 @@ static void test_quality_auto(void **state)
     scene_free(&sc);
 }
 
-/* An any-hit ray first tests the leaf that last occluded one on its thread
- * (traverse_bvh8_single.h); its answer must not depend on that. Wall A
- * (z = 1, 16 x 16 unit cells of two triangles, cell (8, 8) left out) and
- * wall B (z = 2, one quad over the hole); rays go up from z = 0 through
- * cell centres, so every answer is known from the geometry. After rays
- * blocked by one cell of A, the cell's leaf is tested first (seen in the
- * counters: a blocked ray then visits no inner node), and each case below
- * runs with it tried first: through the hole (B blocks), A beyond tmax,
- * A before tmin, pointing away, beside both walls. On every level (each
- * has its own per-thread memory), for each triangle test and with
- * spheres; then a tree built after the first is freed, which the stale
- * memory must not be read for. */
-static sc_ray up_ray(double x, double y, float tmin, float tmax, float dz)
-{
-    return (sc_ray){ { (float)x, (float)y, 0 }, tmin, { 0, 0, dz }, tmax };
-}
-
-static void test_occluder_memory(void **state)
-{
-    (void)state;
-    tmesh m = { 0 };
-    for (int i = 0; i < 16; i++)
-        for (int j = 0; j < 16; j++) {
-            if (i == 8 && j == 8)
-                continue;
-            const uint32_t a = tmesh_vertex(&m, i, j, 1), b = tmesh_vertex(&m, i + 1, j, 1),
-                           c = tmesh_vertex(&m, i + 1, j + 1, 1), d = tmesh_vertex(&m, i, j + 1, 1);
-            tmesh_tri(&m, a, b, c);
-            tmesh_tri(&m, a, c, d);
-        }
-    const uint32_t a = tmesh_vertex(&m, 7.5, 7.5, 2), b = tmesh_vertex(&m, 9.5, 7.5, 2), c = tmesh_vertex(&m, 9.5, 9.5, 2),
-                   d = tmesh_vertex(&m, 7.5, 9.5, 2);
-    tmesh_tri(&m, a, b, c);
-    tmesh_tri(&m, a, c, d);
-    const struct {
-        sc_ray ray;
-        int blocked;
-    } cases[] = {
-        { up_ray(8.5, 8.5, 0, INFINITY, 1), 1 },     /* through the hole: B */
-        { up_ray(3.3, 3.4, 0, 0.5f, 1), 0 },          /* A beyond tmax */
-        { up_ray(3.3, 3.4, 1.5f, INFINITY, 1), 0 },  /* A before tmin, no B there */
-        { up_ray(3.3, 3.4, 0, INFINITY, -1), 0 },     /* away from both */
-        { up_ray(8.5, 8.5, 2.5f, INFINITY, 1), 0 },  /* B before tmin */
-        { up_ray(20.5, 3.4, 0, INFINITY, 1), 0 },    /* beside both */
-        { up_ray(12.6, 5.2, 0, INFINITY, 1), 1 },    /* another cell of A */
-    };
-    const size_t ncases = sizeof cases / sizeof cases[0];
-    const sc_isa start = sc_isa_active();
-    const sc_prefilter_mode modes[] = { SC_PREFILTER_OFF, SC_PREFILTER_CIRCUM };
-    for (int isa = 0; isa < SC_ISA_COUNT; isa++) {
-        if (!sc_isa_supported((sc_isa)isa))
-            continue;
-        for (int tt = 0; tt < SC_TRI_TEST_COUNT; tt++)
-            for (int mi = 0; mi < 2; mi++) {
-                sc_bvh *bvh = build(&m, 4, modes[mi], isa, (sc_tri_test)tt);
-                int probed = 0;
-                for (size_t k = 0; k < ncases; k++) {
-                    int occ = -1;
-                    for (int w = 0; w < 24; w++) {
-                        const sc_ray r = up_ray(3.3 + 0.01 * w, 3.4, 0, INFINITY, 1);
-                        assert_int_equal(sc_trace_any(bvh, &r, &occ, NULL), SC_OK);
-                        assert_int_equal(occ, 1);
-                    }
-                    sc_trace_stats st = { 0 };
-                    const sc_ray r = up_ray(3.5, 3.5, 0, INFINITY, 1);
-                    assert_int_equal(sc_trace_any(bvh, &r, &occ, &st), SC_OK);
-                    assert_int_equal(occ, 1);
-                    probed += st.nodes == 0 && st.leaves == 1;
-                    assert_int_equal(sc_trace_any(bvh, &cases[k].ray, &occ, NULL), SC_OK);
-                    if (occ != cases[k].blocked)
-                        print_message("%s %s %s: case %zu occluded %d\n", sc_isa_name((sc_isa)isa),
-                                      sc_tri_test_name((sc_tri_test)tt), sc_prefilter_mode_name(modes[mi]), k, occ);
-                    assert_int_equal(occ, cases[k].blocked);
-                    /* with counters: the same answer */
-                    assert_int_equal(sc_trace_any(bvh, &cases[k].ray, &occ, &st), SC_OK);
-                    assert_int_equal(occ, cases[k].blocked);
-                }
-                /* the leaf was tested first each time */
-                assert_int_equal(probed, (int)ncases);
-                sc_bvh_free(bvh);
-                /* a new tree (perhaps at the same address) with one leaf:
-                 * the memory of the last is not read for it */
-                tmesh one = { 0 };
-                tmesh_tri(&one, tmesh_vertex(&one, 0, 0, 5), tmesh_vertex(&one, 1, 0, 5), tmesh_vertex(&one, 0, 1, 5));
-                bvh = build(&one, 4, modes[mi], isa, (sc_tri_test)tt);
-                int occ = -1;
-                const sc_ray r = up_ray(3.5, 3.5, 0, INFINITY, 1), r2 = up_ray(0.2, 0.2, 0, INFINITY, 1);
-                assert_int_equal(sc_trace_any(bvh, &r, &occ, NULL), SC_OK);
-                assert_int_equal(occ, 0);
-                assert_int_equal(sc_trace_any(bvh, &r2, &occ, NULL), SC_OK);
-                assert_int_equal(occ, 1);
-                sc_bvh_free(bvh);
-                tmesh_free(&one);
-            }
-    }
-    assert_int_equal(sc_isa_force(start), SC_OK);
-    tmesh_free(&m);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -952,7 +853,6 @@ int main(void)
         cmocka_unit_test(test_quality_high),
         cmocka_unit_test(test_quality_high_soups),
         cmocka_unit_test(test_quality_auto),
-        cmocka_unit_test(test_occluder_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -153,7 +153,8 @@ SC_API sc_status sc_accel_refit(sc_accel *accel);
  * semantics and statistics, over the whole scene. Errors: INVALID_ARGUMENT
  * also for a scene not committed. Through instances an any-hit ray (or
  * packet) first tries the instance that last occluded one on the calling
- * thread, while that keeps paying; the answer does not depend on it. */
+ * thread (if the ray passes its box), while that keeps paying; the speed
+ * and the statistics depend on that, the answer does not. */
 SC_API sc_status sc_accel_closest(const sc_accel *accel, const sc_ray *ray, sc_hitrec *hit,
                                   sc_trace_stats *stats);
 SC_API sc_status sc_accel_any(const sc_accel *accel, const sc_ray *ray, int *occluded, sc_trace_stats *stats);

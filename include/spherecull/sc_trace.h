@@ -107,11 +107,7 @@ typedef struct sc_trace_stats {
 SC_API sc_status sc_trace_closest(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit,
                                   sc_trace_stats *stats);
 
-/* Any hit in [tmin, tmax]: *occluded = 1 if one exists, else 0. The leaf
- * that last occluded a ray on the calling thread is tested first, while
- * that keeps paying (shadow rays of neighbouring pixels are mostly blocked
- * by the same triangles): that changes the speed only, never the answer.
- * With statistics, a ray the remembered leaf blocks counts no node. */
+/* Any hit in [tmin, tmax]: *occluded = 1 if one exists, else 0. */
 SC_API sc_status sc_trace_any(const sc_bvh *bvh, const sc_ray *ray, int *occluded,
                               sc_trace_stats *stats);
 

@@ -193,9 +193,6 @@ sc_status sc_bvh_build_set(const sc_mesh_view *meshes, size_t mesh_count, const 
 
     double t0 = sc_now_seconds();
     sc_bvh *bvh = calloc(1, sizeof *bvh);
-    static _Atomic uint64_t serials;
-    if (bvh)
-        bvh->serial = atomic_fetch_add(&serials, 1) + 1;   /* 0 is no tree */
     bvh_builder B = { 0 };
     B.cfg = &cfg;
     B.meshes = meshes;

@@ -23,8 +23,6 @@ struct sc_bvh {
     size_t references;           /* triangles in the leaves, counted once per leaf: more than
                                     triangles where the high quality's spatial splits cut some */
     int depth;
-    uint64_t serial;             /* unique to this tree in the process (a refit keeps it): keys the
-                                    any-hit walk's per-thread occluder (traverse_bvh8_single.h) */
     int prefetch;                /* sc_prefetch_level: which traversals prefetch the children they push */
     int interleave;              /* streams trace their incoherent rays interleaved (SC_INTERLEAVE_BYTES) */
     double sah_cost, build_seconds;

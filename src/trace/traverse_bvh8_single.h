@@ -190,33 +190,6 @@ SC_TRAVERSE_INLINE void traverse_finish(const sc_ray *ray, sc_hitrec *hit, float
     }
 }
 
-/* The leaf that last occluded an any-hit ray on this thread is tested
- * first by the next one in the same tree, before the walk, which then
- * skips it: the "shadow cache" of Haines and Greenberg (1986), shadow rays
- * from neighbouring pixels towards one light mostly blocked by the same
- * few triangles. Any occluder gives the same answer (a leaf's test is the
- * same whether the walk reaches it or not, and a triangle the ray hits is
- * inside every box on its way), so only the speed depends on it. Whether
- * to test it is learnt per thread, as the octant history below: a score,
- * saturating at 0 and SC_OCC_MAX, goes up by 2 when the leaf occluded the
- * ray (tested first, or the one the walk found) and down by 1 when it did
- * not; from SC_OCC_ON the leaf is tested. So it is tested while it blocks
- * about a third of the rays or more; incoherent shadow rays, which it
- * rarely blocks, pay only the bookkeeping. Keyed by the tree's serial, not
- * its address, which a later tree may reuse. Thread-local, initial-exec. */
-#define SC_OCC_ON 8
-#define SC_OCC_MAX 15
-static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
-    uint64_t serial, ref;
-    int score;
-} sc_occ;
-
-SC_TRAVERSE_INLINE void occ_learn(int blocked)
-{
-    const int s = sc_occ.score + (blocked ? 2 : -1);
-    sc_occ.score = s < 0 ? 0 : s > SC_OCC_MAX ? SC_OCC_MAX : s;
-}
-
 /* signs: the direction's sign bits when the caller has them (the one-body
  * kernel's rows come from them), or -1 to read them from the ray. */
 SC_TRAVERSE_INLINE int
@@ -267,16 +240,6 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
      * node after each mispredicted branch. */
     const char *const nodes = (const char *)bvh->nodes;
     const unsigned char *const leaves = bvh->leaves;
-    /* any hit through the whole tree: the leaf tried first (sc_occ), which
-     * the walk skips; 0 (a node, never a leaf) for none */
-    uint64_t skip = 0;
-    if (ANY && root == 0 && sc_occ.serial == bvh->serial && sc_occ.score >= SC_OCC_ON) {
-        skip = sc_occ.ref;
-        const int occ = leaf_visit(bvh, &ctx, ray, &cur, skip, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST);
-        occ_learn(occ);
-        if (occ)
-            return 1;
-    }
     uint64_t ref = root;               /* nodes[0], or a subtree (packets hand thin lanes over) */
     for (;;) {
         while (!sc_ref_is_leaf(ref)) {
@@ -342,23 +305,12 @@ traverse_single_signs(const sc_bvh *bvh, const sc_ray *ray, sc_hitrec *hit, sc_t
                     sc_prefetch_at(nodes, leaves, node->child[__builtin_ctz(h)]);
             ref = push_children(node, m, dist, stack, &sp, ANY, OCT);
         }
-        if (ANY && ref == skip)
-            goto pop;
-        if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST)) {
-            if (ANY && root == 0) {
-                if (!skip)
-                    occ_learn(sc_occ.serial == bvh->serial && sc_occ.ref == ref);
-                sc_occ.serial = bvh->serial, sc_occ.ref = ref;
-            }
+        if (leaf_visit(bvh, &ctx, ray, &cur, ref, tmin, &tmax, &best, &xb, st, ANY, STATS, TEST))
             return 1;
-        }
     pop:
         do {
-            if (sp == 0) {
-                if (ANY && root == 0 && !skip)
-                    occ_learn(0);
+            if (sp == 0)
                 goto done;
-            }
             sp--;
         } while (!ANY && stack[sp].dist > tmax);
         ref = stack[sp].ref;

@@ -18,6 +18,8 @@
 typedef struct sc_stack_entry {
     uint64_t ref;
     float dist;
+    uint32_t from;   /* the top level's any-hit walk: the node the entry is a child of and its slot
+                        (index << 3 | slot), for its occluder memory (traverse_top_bvh8.h) */
 } sc_stack_entry;
 _Static_assert(sizeof(sc_stack_entry) == 16, "two stack entries a 32-byte store, four a 64-byte one");
 

@@ -85,8 +85,14 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
  * first by the next one, before the walk, which then skips it (the
  * "shadow cache" of Haines and Greenberg, 1986): shadow rays from
  * neighbouring pixels towards one light are mostly blocked by the same
- * object, often the one they start on. Any occluder gives the same answer,
- * so only the speed depends on which is tried first. Whether to try it is
+ * object, often the one they start on. It is tried only if the ray passes
+ * its box (its slot in the top node it hangs from, with the walk's own
+ * test): boxes nest exactly and the test is monotone, so the walk would
+ * reach it, and the answer is the walk's; only the speed depends on the
+ * memory. (Without that test an object walk's float triangle test could
+ * report a hit a little outside a triangle for an item the walk culls.)
+ * Whether
+ * to try it is
  * learnt per thread, as the octant history is: a score, saturating at 0
  * and SC_TOP_OCC_MAX, goes up by 2 when the item occluded the ray (tried,
  * or found by the walk as the occluder) and down by 1 when it did not;
@@ -101,15 +107,18 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
 #define SC_TOP_NO_SKIP (~(uint64_t)0)   /* no top reference is all ones */
 static _Thread_local __attribute__((tls_model("initial-exec"))) struct {
     const sc_top *T;
-    uint32_t item;
+    uint32_t item, from;   /* from: its top node's index << 3 | its slot there */
     int score;
 } sc_top_occ;
 
 /* The reference of the item to try first (SC_REF_LEAF | item), or
- * SC_TOP_NO_SKIP when none is to be tried. */
-SC_TRAVERSE_INLINE uint64_t top_occ_first(const sc_top *T)
+ * SC_TOP_NO_SKIP when none is to be tried; *from: where it hangs. Top
+ * levels of 2^28 items or more (node indices past 29 bits) keep no memory. */
+SC_TRAVERSE_INLINE uint64_t top_occ_first(const sc_top *T, uint32_t *from)
 {
-    return sc_top_occ.T == T && sc_top_occ.item < T->item_count && sc_top_occ.score >= SC_TOP_OCC_ON
+    *from = sc_top_occ.from;
+    return sc_top_occ.T == T && sc_top_occ.item < T->item_count && T->item_count < (1u << 28) &&
+                   sc_top_occ.score >= SC_TOP_OCC_ON
                ? SC_REF_LEAF | sc_top_occ.item
                : SC_TOP_NO_SKIP;
 }
@@ -120,12 +129,13 @@ SC_TRAVERSE_INLINE void top_occ_learn(int blocked)
     sc_top_occ.score = s < 0 ? 0 : s > SC_TOP_OCC_MAX ? SC_TOP_OCC_MAX : s;
 }
 
-/* Item `item` of T occluded a ray that did not try an item first. */
-SC_TRAVERSE_INLINE void top_occ_found(const sc_top *T, uint32_t item, int tried)
+/* Item `item` of T, hanging from `from`, occluded a ray; tried: whether
+ * the ray tried an item first (and has learnt from it already). */
+SC_TRAVERSE_INLINE void top_occ_found(const sc_top *T, uint32_t item, uint32_t from, int tried)
 {
     if (!tried)
         top_occ_learn(sc_top_occ.T == T && sc_top_occ.item == item);
-    sc_top_occ.T = T, sc_top_occ.item = item;
+    sc_top_occ.T = T, sc_top_occ.item = item, sc_top_occ.from = from;
 }
 
 /* The walk keeps the node it is in (a single hit child is entered without
@@ -159,11 +169,21 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
     uint64_t skip = SC_TOP_NO_SKIP;    /* any hit: the item tried first */
-    if (ANY && (skip = top_occ_first(T)) != SC_TOP_NO_SKIP) {
-        const int occ = top_visit(T, (uint32_t)(skip & 0xffffffffu), ray, om, dm, best, st, ANY, INC);
+    uint32_t from = 0;                 /* any hit: where ref hangs from (index << 3 | slot) */
+    if (ANY && (skip = top_occ_first(T, &from)) != SC_TOP_NO_SKIP) {
+        const sc_bvh_node8 *parent = &T->nodes[from >> 3];
+        if (st)
+            st->nodes++;
+        _Alignas(32) float pd[SC_BVH_N];
+        const unsigned pm = parallel ? sc_top_slab(&tr, parent, ray->tmin, tcull, pd)
+                                     : node_test(&ctx, parent, ray->tmin, tcull, pd, SC_OCT_ANY, 1);
+        const int occ = pm >> (from & 7) & 1 &&
+                        top_visit(T, (uint32_t)(skip & 0xffffffffu), ray, om, dm, best, st, ANY, INC);
         top_occ_learn(occ);
         if (occ)
             return 1;
+        if (!(pm >> (from & 7) & 1))
+            skip = SC_TOP_NO_SKIP - 1;   /* not tried (its box is missed): the walk skips nothing */
     }
     uint64_t ref = 0;                  /* the root, nodes[0] */
     for (;;) {
@@ -175,8 +195,10 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
             const unsigned mask = parallel ? sc_top_slab(&tr, node, ray->tmin, tcull, dist)
                                            : node_test(&ctx, node, ray->tmin, tcull, dist, SC_OCT_ANY, 1);
             if (mask) {
+                const uint32_t at = (uint32_t)ref << 3;
                 if ((mask & (mask - 1)) == 0) {
                     ref = node->child[__builtin_ctz(mask)];
+                    from = at | (uint32_t)__builtin_ctz(mask);
                 } else if (ANY) {
                     /* no distance order for any hit, but not the BVHs'
                      * slot order either: from the last slot down (the
@@ -186,8 +208,12 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
                      * 7 % (docs/scenes.md, twenty-fourth session). */
                     const unsigned last = 31 - (unsigned)__builtin_clz(mask);
                     ref = node->child[last];
-                    for (unsigned m = mask & ~(1u << last); m; m &= m - 1)
-                        stack[sp++].ref = node->child[__builtin_ctz(m)];
+                    from = at | last;
+                    for (unsigned m = mask & ~(1u << last); m; m &= m - 1) {
+                        stack[sp].ref = node->child[__builtin_ctz(m)];
+                        stack[sp].from = at | (uint32_t)__builtin_ctz(m);
+                        sp++;
+                    }
                 } else {
                     ref = push_children(node, mask, dist, stack, &sp, 0, SC_OCT_ANY);
                 }
@@ -195,7 +221,7 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
             }
         } else if ((!ANY || ref != skip) && top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY, INC)) {
             if (ANY) {
-                top_occ_found(T, (uint32_t)(ref & 0xffffffffu), skip != SC_TOP_NO_SKIP);
+                top_occ_found(T, (uint32_t)(ref & 0xffffffffu), from, skip != SC_TOP_NO_SKIP);
                 return 1;
             }
             tcull = sc_top_tmax(best, ray->tmax);
@@ -209,6 +235,8 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
             sp--;
         } while (!ANY && stack[sp].dist > tcull);
         ref = stack[sp].ref;
+        if (ANY)
+            from = stack[sp].from;
     }
 }
 

@@ -78,6 +78,7 @@ typedef struct top_pk {
 typedef struct top_pk_entry {
     uint64_t ref;
     uint32_t lanes;
+    uint32_t from;   /* the top node it is a child of and its slot (index << 3 | slot) */
 } top_pk_entry;
 
 /* Whether the packet is narrow next to a box of centre c and half
@@ -813,19 +814,27 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
     top_pk_setup(&P, pl);
     top_pk_far(&P);
     /* any hit: the item that last occluded a ray on this thread is tried
-     * first with every lane, and skipped by the walk (top_occ_first) */
+     * first by the lanes that pass its box (its slot in its top node, the
+     * walk's own lane test), and skipped by the walk: the other lanes'
+     * walks never reach it (top_occ_first) */
     uint64_t skip = SC_TOP_NO_SKIP;
+    uint32_t from;
     int found = 0;
-    if (any && (skip = top_occ_first(T)) != SC_TOP_NO_SKIP) {
-        top_pk_visit(&P, (uint32_t)(skip & 0xffffffffu), pl);
-        top_occ_learn(P.active != pl);
+    if (any && (skip = top_occ_first(T, &from)) != SC_TOP_NO_SKIP) {
+        float near;
+        const uint32_t L = top_pk_child(&P, &T->nodes[from >> 3], (int)(from & 7), pl, &near);
+        if (st)
+            st->nodes++;
+        if (L)
+            top_pk_visit(&P, (uint32_t)(skip & 0xffffffffu), L);
         found = P.active != pl;
+        top_occ_learn(found);
     }
     /* Each node pushes at most its 8 children, as in the single-ray walk,
      * so the single-ray stack bound holds. */
     top_pk_entry stack[SC_TRACE_STACK];
     int sp = 0;
-    stack[sp++] = (top_pk_entry){ 0, pl };
+    stack[sp++] = (top_pk_entry){ 0, pl, 0 };
     while (sp && P.active) {
         const top_pk_entry e = stack[--sp];
         const uint32_t L = e.lanes & P.active;
@@ -839,7 +848,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             if (!any) {
                 top_pk_far(&P);
             } else if (P.active != before && !found) {
-                top_occ_found(T, (uint32_t)(e.ref & 0xffffffffu), skip != SC_TOP_NO_SKIP);
+                top_occ_found(T, (uint32_t)(e.ref & 0xffffffffu), e.from, skip != SC_TOP_NO_SKIP);
                 found = 1;
             }
             continue;
@@ -869,7 +878,7 @@ static SC_TARGET void top_packet(const sc_top *T, uint32_t lanes, const float *r
             idx[j] = i;
         }
         for (int j = 0; j < n; j++)
-            stack[sp++] = (top_pk_entry){ node->child[idx[j]], cl[idx[j]] };
+            stack[sp++] = (top_pk_entry){ node->child[idx[j]], cl[idx[j]], (uint32_t)e.ref << 3 | (uint32_t)idx[j] };
     }
     if (any && !found && skip == SC_TOP_NO_SKIP)
         top_occ_learn(0);
