@@ -84,10 +84,11 @@ static void shuffle(sc_ray *r, size_t n, uint64_t seed)
     sc_rng rng;
     sc_rng_seed(&rng, seed);
     for (size_t i = n; i > 1; i--) {
-        const size_t j = (size_t)sc_rng_range(&rng, 0, (double)i);
+        size_t j = (size_t)sc_rng_range(&rng, 0, (double)i);
+        j = j < i ? j : i - 1;   /* a product that rounds up to i */
         const sc_ray t = r[i - 1];
-        r[i - 1] = r[j < i ? j : i - 1];
-        r[j < i ? j : i - 1] = t;
+        r[i - 1] = r[j];
+        r[j] = t;
     }
 }
 

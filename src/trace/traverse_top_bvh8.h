@@ -91,9 +91,8 @@ SC_TRAVERSE_INLINE int top_visit(const sc_top *T, uint32_t item, const sc_ray *r
  * reach it, and the answer is the walk's; only the speed depends on the
  * memory. (Without that test an object walk's float triangle test could
  * report a hit a little outside a triangle for an item the walk culls.)
- * Whether
- * to try it is
- * learnt per thread, as the octant history is: a score, saturating at 0
+ * Whether to try it is learnt per thread, as the octant history is: a
+ * score, saturating at 0
  * and SC_TOP_OCC_MAX, goes up by 2 when the item occluded the ray (tried,
  * or found by the walk as the occluder) and down by 1 when it did not;
  * from SC_TOP_OCC_ON the item is tried. So it is tried while it blocks
@@ -168,22 +167,28 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
     sc_top_ray_extent(ray, &om, &dm);
     sc_stack_entry stack[SC_TRACE_STACK];
     int sp = 0;
-    uint64_t skip = SC_TOP_NO_SKIP;    /* any hit: the item tried first */
+    /* any hit: the remembered item, tried (and learnt from) first when its
+     * box is passed, then skipped by the walk */
+    uint64_t skip = SC_TOP_NO_SKIP;
     uint32_t from = 0;                 /* any hit: where ref hangs from (index << 3 | slot) */
-    if (ANY && (skip = top_occ_first(T, &from)) != SC_TOP_NO_SKIP) {
-        const sc_bvh_node8 *parent = &T->nodes[from >> 3];
+    int tried = 0;
+    const uint64_t first = ANY ? top_occ_first(T, &from) : SC_TOP_NO_SKIP;
+    if (first != SC_TOP_NO_SKIP) {
         if (st)
             st->nodes++;
         _Alignas(32) float pd[SC_BVH_N];
+        const sc_bvh_node8 *parent = &T->nodes[from >> 3];
         const unsigned pm = parallel ? sc_top_slab(&tr, parent, ray->tmin, tcull, pd)
                                      : node_test(&ctx, parent, ray->tmin, tcull, pd, SC_OCT_ANY, 1);
-        const int occ = pm >> (from & 7) & 1 &&
-                        top_visit(T, (uint32_t)(skip & 0xffffffffu), ray, om, dm, best, st, ANY, INC);
+        tried = 1;
+        int occ = 0;
+        if (pm >> (from & 7) & 1) {
+            skip = first;
+            occ = top_visit(T, (uint32_t)(first & 0xffffffffu), ray, om, dm, best, st, ANY, INC);
+        }
         top_occ_learn(occ);
         if (occ)
             return 1;
-        if (!(pm >> (from & 7) & 1))
-            skip = SC_TOP_NO_SKIP - 1;   /* not tried (its box is missed): the walk skips nothing */
     }
     uint64_t ref = 0;                  /* the root, nodes[0] */
     for (;;) {
@@ -221,14 +226,14 @@ SC_TRAVERSE_INLINE int top_traverse(const sc_top *T, const sc_ray *ray, sc_hitre
             }
         } else if ((!ANY || ref != skip) && top_visit(T, (uint32_t)(ref & 0xffffffffu), ray, om, dm, best, st, ANY, INC)) {
             if (ANY) {
-                top_occ_found(T, (uint32_t)(ref & 0xffffffffu), from, skip != SC_TOP_NO_SKIP);
+                top_occ_found(T, (uint32_t)(ref & 0xffffffffu), from, tried);
                 return 1;
             }
             tcull = sc_top_tmax(best, ray->tmax);
         }
         do {
             if (sp == 0) {
-                if (ANY && skip == SC_TOP_NO_SKIP)
+                if (ANY && !tried)
                     top_occ_learn(0);
                 return 0;
             }
